@@ -1,0 +1,1 @@
+"""Grammar of the RCS design language (data package: rcs.lark)."""

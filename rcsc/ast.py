@@ -1,0 +1,292 @@
+"""The abstract syntax tree: what the engineer wrote, with a span on every node.
+
+The tree mirrors the text closely (no name resolution, no types); `rcsc.sema`
+turns it into the checked design model of `rcsc.model`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from rcsc.source import Span
+
+
+@dataclass
+class Node:
+    span: Span
+
+
+@dataclass
+class Ident(Node):
+    """A name together with the span of just that name."""
+
+    name: str
+
+
+# ---- expressions -------------------------------------------------------------
+
+
+@dataclass
+class Expr(Node):
+    pass
+
+
+@dataclass
+class IntLit(Expr):
+    value: int
+
+
+@dataclass
+class FloatLit(Expr):
+    value: float
+
+
+@dataclass
+class BoolLit(Expr):
+    value: bool
+
+
+@dataclass
+class DurationLit(Expr):
+    nanos: int
+    text: str
+
+
+@dataclass
+class Name(Expr):
+    name: str
+
+
+@dataclass
+class Attr(Expr):
+    obj: Expr
+    attr: Ident
+
+
+@dataclass
+class Arg(Node):
+    name: Ident | None
+    value: Expr
+
+
+@dataclass
+class Call(Expr):
+    func: Ident
+    args: list[Arg]
+
+
+@dataclass
+class Unary(Expr):
+    op: str  # "-" or "not"
+    operand: Expr
+
+
+@dataclass
+class Binary(Expr):
+    op: str  # + - * / % == != < <= > >= and or
+    left: Expr
+    right: Expr
+    op_span: Span
+
+
+@dataclass
+class IfExpr(Expr):
+    cond: Expr
+    then: Expr
+    else_: Expr
+
+
+# ---- statements and jobs -------------------------------------------------------
+
+
+@dataclass
+class Stmt(Node):
+    pass
+
+
+@dataclass
+class Assign(Stmt):
+    target: list[Ident]  # a.b.c
+    op: str  # = += -= *=
+    value: Expr
+
+
+@dataclass
+class CallStmt(Stmt):
+    call: Call
+
+
+@dataclass
+class Command(Stmt):
+    sub: Ident
+    verb: Ident
+    args: list[Arg]
+
+
+@dataclass
+class Report(Stmt):
+    status: Ident
+
+
+@dataclass
+class If(Stmt):
+    branches: list[tuple[Expr, list[Stmt]]]
+    else_body: list[Stmt] | None
+
+
+# ---- declarations --------------------------------------------------------------
+
+
+@dataclass
+class TypeRef(Node):
+    name: Ident
+    lo: Expr | None = None
+    hi: Expr | None = None
+
+
+@dataclass
+class Param(Node):
+    name: Ident
+    type: TypeRef
+
+
+@dataclass
+class Import(Node):
+    target: str  # "std.math" or a relative path
+    is_file: bool
+
+
+@dataclass
+class Const(Node):
+    name: Ident
+    type: TypeRef
+    value: Expr
+
+
+@dataclass
+class Enum(Node):
+    name: Ident
+    members: list[Ident]
+
+
+@dataclass
+class Record(Node):
+    name: Ident
+    fields: list[Param]
+
+
+@dataclass
+class GmVar(Node):
+    name: Ident
+    type: TypeRef
+    init: Expr | None
+    from_env: bool
+
+
+@dataclass
+class Function(Node):
+    name: Ident
+    params: list[Param]
+    ret: TypeRef
+    body: Expr
+
+
+@dataclass
+class Extern(Node):
+    name: Ident
+    params: list[Param]
+    ret: TypeRef
+    budget: DurationLit
+
+
+@dataclass
+class Verb(Node):
+    name: Ident
+    params: list[Param]
+
+
+@dataclass
+class VerbSet(Node):
+    name: Ident
+    verbs: list[Verb]
+
+
+@dataclass
+class StatePat(Node):
+    kind: str  # "new", "any", "named"
+    name: str | None = None
+
+
+@dataclass
+class NextState(Node):
+    kind: str  # "named", "done", "error", "same", "new"
+    name: str | None = None
+    code: Expr | None = None
+
+
+@dataclass
+class Rule(Node):
+    label: Ident
+    guard: Expr | None  # None: the `otherwise` rule of its state
+    guard_span: Span
+    state: StatePat
+    next: NextState
+    jobs: list[Stmt]
+
+
+@dataclass
+class Plan(Node):
+    name: Ident
+    continuous: bool
+    rules: list[Rule]
+    modifiers: list[Ident] = field(default_factory=list)
+
+
+@dataclass
+class Decl(Node):
+    """A named, typed member of a controller (status field or local)."""
+
+    name: Ident
+    type: TypeRef
+    init: Expr
+
+
+@dataclass
+class NameList(Node):
+    names: list[Ident]
+
+
+@dataclass
+class Controller(Node):
+    name: Ident
+    simulator: bool
+    level: list[tuple[int, Span]] = field(default_factory=list)
+    budget: list[DurationLit] = field(default_factory=list)
+    subordinates: list[NameList] = field(default_factory=list)
+    reads: list[NameList] = field(default_factory=list)
+    writes: list[NameList] = field(default_factory=list)
+    verbs: list[Verb] = field(default_factory=list)
+    verb_sets: list[Ident] = field(default_factory=list)
+    reports: list[NameList] = field(default_factory=list)
+    status_fields: list[Decl] = field(default_factory=list)
+    locals: list[Decl] = field(default_factory=list)
+    pre: list[tuple[Span, list[Stmt]]] = field(default_factory=list)
+    post: list[tuple[Span, list[Stmt]]] = field(default_factory=list)
+    plans: list[Plan] = field(default_factory=list)
+
+
+@dataclass
+class Cpu(Node):
+    name: Ident
+    heartbeat: list[DurationLit] = field(default_factory=list)
+    overhead: list[DurationLit] = field(default_factory=list)
+    schedule: list[NameList] = field(default_factory=list)
+
+
+@dataclass
+class File(Node):
+    """One parsed source file: `design NAME` or `module a.b`, then items."""
+
+    kind: str  # "design", "module" or "" (no header)
+    name: Ident | None
+    items: list[Node]

@@ -1,0 +1,20 @@
+"""Structural checks on the design model, one check family per module.
+
+Each family is a function `check(design, diags)` that only reads the model
+(except the hierarchy check, which records each controller's supervisor, and
+the timing check, which records each controller's CPU, for later stages).
+"""
+
+from __future__ import annotations
+
+from rcsc.checks import hierarchy, ownership, plans, timing
+from rcsc.diagnostics import Diagnostics
+from rcsc.model import Design
+
+FAMILIES = (hierarchy, ownership, plans, timing)
+
+
+def check_model(design: Design, diags: Diagnostics) -> None:
+    """Run every check family; findings go to `diags`."""
+    for family in FAMILIES:
+        family.check(design, diags)

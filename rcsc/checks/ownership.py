@@ -1,0 +1,49 @@
+"""Global Memory ownership checks (paper section 3.8.5).
+
+Every GM variable has exactly one writer (a controller's `writes`, or `from
+env`), an initial value (checked in sema, where the declaration is read), and
+is read by someone; nothing is read that nobody writes.
+"""
+
+from __future__ import annotations
+
+from rcsc.diagnostics import Diagnostics
+from rcsc.model import Design
+
+
+def check(design: Design, diags: Diagnostics) -> None:
+    writers: dict[str, list] = {name: [] for name in design.gm}
+    readers: dict[str, list] = {name: [] for name in design.gm}
+    for c in design.controllers.values():
+        for use in c.writes:
+            if use.name in writers:
+                writers[use.name].append((c, use))
+        for use in c.reads:
+            if use.name in readers:
+                readers[use.name].append((c, use))
+
+    for name, var in design.gm.items():
+        ws = writers[name]
+        if var.from_env and ws:
+            c, use = ws[0]
+            diag = diags.add("E0400", use.span, f"`{name}` is written by the environment and by `{c.name}`", "second writer")
+            diag.with_label(var.span, "declared `from env`")
+        for c, use in ws[1:]:
+            first_c, first_use = ws[0]
+            diag = diags.add("E0400", use.span, f"`{name}` is already written by `{first_c.name}`", "second writer")
+            diag.with_label(first_use.span, f"first writer `{first_c.name}`").with_note(
+                "every Global Memory variable has exactly one writer"
+            )
+        if not ws and not var.from_env:
+            if readers[name]:
+                c, use = readers[name][0]
+                diag = diags.add("E0401", use.span, f"`{name}` is read by `{c.name}` but nothing writes it", "never written")
+                diag.with_label(var.span, "declared here")
+                diag.with_help(f"add `writes {name}` to the controller that produces it, or declare it `from env`")
+            else:
+                diags.add("W0403", var.span, f"Global Memory variable `{name}` is never read or written", "unused")
+        elif not readers[name]:
+            diags.add("W0403", var.span, f"Global Memory variable `{name}` is never read", "never read").with_help(
+                f"add `reads {name}` to the controller that uses it, or remove it"
+            )
+

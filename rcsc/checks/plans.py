@@ -1,0 +1,185 @@
+"""Plan (state table) checks (paper sections 4.2 and 5.3.2).
+
+Per plan: an entry rule for `new`; every state reachable from `new`; from
+every reachable state `done` or `error` reachable unless the plan is
+`continuous`; no rule after an unconditional rule of the same state; at most
+one `otherwise` per state; at most one command per subordinate in a job list;
+a state that waits on a subordinate must also handle that subordinate's error.
+The state graph is built with networkx; node "new" is the entry and the
+nodes "<done>" and "<error>" are the terminals.
+"""
+
+from __future__ import annotations
+
+import networkx as nx
+
+from rcsc import model as m
+from rcsc.diagnostics import Diagnostics
+from rcsc.model import Design
+
+MAX_RULES = 10
+DONE, ERROR = "<done>", "<error>"
+WAIT_ATTRS = ("done", "status", "executing")
+
+
+def plan_states(plan: m.Plan) -> list[str]:
+    """`new` and the named states, in order of first appearance."""
+    return ["new"] + plan.states
+
+
+def rule_sources(rule: m.Rule, states: list[str]) -> list[str]:
+    """The states in which `rule` is evaluated."""
+    if rule.state.kind == "any":
+        return list(states)
+    if rule.state.kind == "new":
+        return ["new"]
+    return [rule.state.name or ""]
+
+
+def rule_target(rule: m.Rule, source: str) -> str | None:
+    k = rule.next.kind
+    if k == "named":
+        return rule.next.name
+    if k == "same":
+        return source
+    if k == "done":
+        return DONE
+    if k == "error":
+        return ERROR
+    return None  # `new` as next state: reported in sema
+
+
+def state_graph(plan: m.Plan) -> nx.MultiDiGraph:
+    """The plan's state graph: an edge per (rule, source state), keyed by rule index."""
+    states = plan_states(plan)
+    g = nx.MultiDiGraph()
+    g.add_nodes_from(states + [DONE, ERROR])
+    for r in plan.rules:
+        for src in rule_sources(r, states):
+            dst = rule_target(r, src)
+            if dst is not None:
+                g.add_edge(src, dst, key=r.index, rule=r)
+    return g
+
+
+def is_always_true(e: m.Expr | None) -> bool:
+    return isinstance(e, m.Const) and e.value is True
+
+
+def check(design: Design, diags: Diagnostics) -> None:
+    for c in design.controllers.values():
+        for plan in c.plans.values():
+            _check_plan(c, plan, diags)
+
+
+def _first_mention(plan: m.Plan, state: str) -> m.StateRef | None:
+    for r in plan.rules:
+        if r.state.kind == "named" and r.state.name == state:
+            return r.state
+    for r in plan.rules:
+        if r.next.kind == "named" and r.next.name == state:
+            return r.next
+    return None
+
+
+def _check_plan(c: m.Controller, plan: m.Plan, diags: Diagnostics) -> None:
+    rules = plan.rules
+    if len(rules) > MAX_RULES:
+        diags.add("W0311", plan.name_span, f"plan `{plan.verb}` of `{c.name}` has {len(rules)} rules", f"more than {MAX_RULES} rules").with_help(
+            "split the task: give part of it to a subordinate as its own command"
+        )
+    if not any(r.state.kind in ("new", "any") for r in rules):
+        diags.add("E0511", plan.name_span, f"plan `{plan.verb}` has no rule for `new`", "never leaves `new`").with_help(
+            f"add an entry rule: `E0: true | new -> S1 | ...;`"
+        )
+        return
+
+    states = plan_states(plan)
+    g = state_graph(plan)
+    reachable = nx.descendants(g, "new") | {"new"}
+    for s in plan.states:
+        if s not in reachable:
+            ref = _first_mention(plan, s)
+            if ref is not None:
+                diags.add("E0502", ref.span, f"state `{s}` of plan `{plan.verb}` is unreachable from `new`", "unreachable state").with_note(
+                    "no rule leads here from the entry state"
+                )
+    if not plan.continuous:
+        ends = nx.ancestors(g, DONE) | nx.ancestors(g, ERROR)
+        for s in states:
+            if s in reachable and s not in ends:
+                ref = _first_mention(plan, s) if s != "new" else None
+                span = ref.span if ref is not None else plan.name_span
+                diag = diags.add("E0503", span, f"from state `{s}` plan `{plan.verb}` can never finish", "no way to `done` or `error`")
+                diag.with_help(f"add a rule that leads to `done` or `error(...)`, or declare `plan {plan.verb} continuous`")
+
+    _check_shadowing(plan, states, diags)
+    _check_otherwise(plan, diags)
+    _check_commands(plan, diags)
+    _check_error_handling(c, plan, states, diags)
+
+
+def _check_shadowing(plan: m.Plan, states: list[str], diags: Diagnostics) -> None:
+    covered: dict[str, m.Rule] = {}  # state -> first unconditional rule covering it
+    for r in plan.rules:
+        sources = rule_sources(r, states)
+        dead_by = [covered[s] for s in sources if s in covered]
+        if sources and len(dead_by) == len(sources):
+            first = dead_by[0]
+            what = "`otherwise`" if r.otherwise else f"rule `{r.label}`"
+            diag = diags.add("E0506", r.label_span, f"{what} can never fire", "dead rule")
+            diag.with_label(first.guard_span, f"`{first.label}` always matches first")
+            diag.with_note("the first rule whose state and condition match fires; an unconditional rule hides the rules after it")
+        if is_always_true(r.guard):
+            for s in sources:
+                covered.setdefault(s, r)
+
+
+def _check_otherwise(plan: m.Plan, diags: Diagnostics) -> None:
+    seen: dict[str, m.Rule] = {}
+    for r in plan.rules:
+        if not r.otherwise or r.state.kind == "any":
+            continue
+        key = r.state.name if r.state.kind == "named" else "new"
+        if key in seen:
+            diag = diags.add("E0509", r.guard_span, f"state `{key}` already has an `otherwise` rule", "second `otherwise`")
+            diag.with_label(seen[key].guard_span, "first `otherwise`")
+        else:
+            seen[key] = r
+
+
+def _check_commands(plan: m.Plan, diags: Diagnostics) -> None:
+    for r in plan.rules:
+        issued: dict[str, m.Command] = {}
+        for job in r.jobs:
+            if isinstance(job, m.Command):
+                if job.sub in issued:
+                    diag = diags.add("E0504", job.span, f"second command to `{job.sub}` in rule `{r.label}`", "second command")
+                    diag.with_label(issued[job.sub].span, "first command")
+                    diag.with_note("commands are not queued: the second would supersede the first in the same cycle")
+                else:
+                    issued[job.sub] = job
+
+
+def _subs_in(e: m.Expr | None, attrs: tuple[str, ...]) -> list[m.SubView]:
+    if e is None:
+        return []
+    return [x for x in m.walk_expr(e) if isinstance(x, m.SubView) and x.attr in attrs]
+
+
+def _check_error_handling(c: m.Controller, plan: m.Plan, states: list[str], diags: Diagnostics) -> None:
+    handled: dict[str, set[str]] = {s: set() for s in states}
+    for r in plan.rules:
+        for view in _subs_in(r.guard, ("error", "error_code")):
+            for s in rule_sources(r, states):
+                handled[s].add(view.sub)
+    reported: set[tuple[int, str]] = set()
+    for r in plan.rules:
+        for view in _subs_in(r.guard, WAIT_ATTRS):
+            missing = [s for s in rule_sources(r, states) if view.sub not in handled[s]]
+            if missing and (r.index, view.sub) not in reported:
+                reported.add((r.index, view.sub))
+                where = f"state `{missing[0]}`" if len(missing) == 1 else "states " + ", ".join(f"`{s}`" for s in missing)
+                diag = diags.add("E0505", view.span, f"{where} waits on `{view.sub}` but never tests `{view.sub}.error`", "waits here")
+                diag.with_note(f"if `{view.sub}` fails, plan `{plan.verb}` of `{c.name}` waits forever")
+                diag.with_help(f"add a rule such as `E9: {view.sub}.error | * -> error(1);`")

@@ -1,0 +1,305 @@
+"""The table of diagnostic codes: stable code, default severity, title, explanation.
+
+Codes never change meaning once released.  `rcsc explain CODE` prints the
+explanation; the SARIF rendering publishes the table as rule metadata.  The
+tests require every code here to have an explanation and a test input that
+asserts its code, line and column.
+
+Numbering: E00xx syntax and files, E01xx names, E02xx types and values,
+E03xx hierarchy, E04xx Global Memory ownership, E05xx plans, E06xx timing.
+W-codes are warnings (lints); they fail a run only with --deny-warnings.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rcsc.diagnostics import Severity
+
+
+@dataclass(frozen=True)
+class Code:
+    code: str
+    severity: Severity
+    title: str
+    explanation: str
+
+
+_E = Severity.ERROR
+_W = Severity.WARNING
+
+_TABLE: list[tuple[str, Severity, str, str]] = [
+    # ---- syntax and files ---------------------------------------------------
+    ("E0001", _E, "syntax error", """
+The parser met a token that cannot continue the design at this point. The
+note lists what would have been accepted. A common cause is a state-table rule
+missing its closing `;`. Every rule has the form
+
+    LABEL: condition | current-state -> next-state | job, job ;
+"""),
+    ("E0002", _E, "unexpected character", """
+The text contains a character that is not part of the language, or a string
+(an import path) that is never closed. Comments are `// ...` and `/* ... */`.
+"""),
+    ("E0003", _E, "cannot read imported file", """
+An `import "path.rcs"` names a file that does not exist or cannot be read. Paths
+are relative to the folder of the file that imports them.
+"""),
+    ("E0004", _E, "import outside the design folder", """
+A local import must stay inside the design's own folder (the folder of the file
+given to rcsc). Absolute paths and paths that climb out with `..` are refused so
+that a design can be moved and checked anywhere. Shared code belongs in a
+standard-library module or a copy inside the design folder.
+"""),
+    ("E0005", _E, "unknown standard-library module", """
+`import std.NAME` names a module that the installed rcsc standard library does
+not have. `rcsc explain E0005` lists nothing more; see docs/stdlib.md for the
+modules that exist.
+"""),
+    ("E0006", _E, "wrong file header", """
+The file given to rcsc must begin with `design NAME`; a file brought in with
+`import` must begin with `module NAME` (or have no header). One design is one
+file set with exactly one `design` header.
+"""),
+    # ---- names --------------------------------------------------------------
+    ("E0100", _E, "unknown name", """
+A name is used that is not declared where it is used. Inside a controller the
+visible names are: constants, functions, enum types, the Global Memory variables
+the controller lists in `reads` or `writes`, its locals and status fields, its
+subordinates (as `SUB.done`, ...), and in a plan `cmd.PARAM` and `in_state`.
+A GM variable that exists but is not listed in `reads` is reported with a help.
+"""),
+    ("E0101", _E, "duplicate definition", """
+Two declarations in the same scope have the same name. Every type, constant,
+Global Memory variable, function, controller, CPU, verb, local, status field
+and rule label must be unique in its scope.
+"""),
+    ("E0102", _E, "unknown type", """
+A type name is neither a built-in type (bool, i32, i64, u32, f64, duration) nor
+an enum or record declared in the design or its imports.
+"""),
+    ("E0103", _E, "no such field or attribute", """
+`x.name` names a field that the record, enum, command or subordinate does not
+have. On a subordinate `S` the attributes are `S.done`, `S.error`,
+`S.executing`, `S.error_code`, `S.age`, its declared extra status values
+(`S.AT_GOAL`) and its declared status fields.
+"""),
+    ("E0104", _E, "unknown controller", """
+A `subordinates` list or a CPU `schedule` names a controller that the design
+does not declare.
+"""),
+    ("E0105", _E, "verb not accepted by the subordinate", """
+A job list issues `SUB.VERB(...)` but SUB declares no such verb. A command may
+only use a verb that the subordinate accepts (paper section 5.3.2).
+"""),
+    ("E0106", _E, "unknown verb set", """
+`verbs NAME` in a controller names no `verbset` of the design or its imports.
+"""),
+    ("E0107", _E, "unknown status value", """
+`report NAME` names a status value the controller did not declare with
+`reports NAME`. The built-in values DONE, EXEC and ERROR are set by `-> done`,
+by a new command and by `-> error(code)`; extra values are declared.
+"""),
+    ("E0108", _E, "command parameter outside a plan", """
+`cmd.PARAM` reads a parameter of the command being executed. It is only
+available inside the plan of a verb that declares that parameter, because in
+`pre` and `post` the active command may be any verb (or none).
+"""),
+    # ---- types and values ---------------------------------------------------
+    ("E0200", _E, "mismatched types", """
+An expression has a different type from the one its place requires: a condition
+that is not bool, an assignment of f64 to an i32 variable, an argument of the
+wrong type. rcsc never converts silently between numeric types (except that an
+integer literal may stand for an f64); use `f64(x)`, `i32(x)`, `i64(x)`,
+`u32(x)` to convert.
+"""),
+    ("E0201", _E, "wrong number of arguments", """
+A call of a function, a record constructor or a command to a subordinate gives
+more or fewer arguments than the declaration has parameters.
+"""),
+    ("E0202", _E, "bad named argument", """
+A named argument `name = value` names no parameter, names one twice, or gives a
+parameter already given by position.
+"""),
+    ("E0203", _E, "assignment to a read-only value", """
+Only locals, status fields, Global Memory variables listed in the controller's
+`writes`, and fields of those may be assigned. Constants, command parameters,
+GM variables the controller only reads, subordinates' status and `in_state`
+are read-only.
+"""),
+    ("E0204", _E, "not a constant expression", """
+Constant values, initial values, enum-free ranges and `error(code)` codes must
+be computable when the design is compiled: literals, constants, enum members
+and arithmetic on them.
+"""),
+    ("E0205", _E, "recursive function", """
+Functions must run in bounded time (paper section 1.3: atomic algorithms), so a
+function may not call itself, directly or through other functions.
+"""),
+    ("E0206", _E, "value outside its declared range", """
+A constant or initial value lies outside the range declared with
+`TYPE in LO..HI`, or the range is empty (LO > HI).
+"""),
+    ("E0207", _E, "integer literal out of range", """
+An integer literal does not fit in the fixed-width type its place requires
+(i32: -2^31..2^31-1, i64: -2^63..2^63-1, u32: 0..2^32-1).
+"""),
+    ("E0208", _E, "operator not defined for this type", """
+The operator cannot be applied to values of this type: arithmetic on bool or
+enums, `%` on f64, ordering comparisons on enums or bools, `and`/`or`/`not` on
+numbers.
+"""),
+    ("E0209", _E, "missing or repeated controller attribute", """
+Every controller declares `level N` and `budget DURATION` once in its header,
+and every CPU declares `heartbeat DURATION` and `schedule ...` once.
+"""),
+    ("E0210", _E, "duration finer than a nanosecond", """
+Durations are exact whole numbers of nanoseconds. `1.5 us` is fine; `0.0001 ns`
+cannot be represented.
+"""),
+    ("E0211", _E, "not callable here", """
+The name called is not a function, extern, record type or conversion, or an
+`extern` function is called inside a pure `fn` (pure functions must be the same
+on every target and cannot call hand-written code).
+"""),
+    # ---- hierarchy ----------------------------------------------------------
+    ("E0300", _E, "controller has more than one supervisor", """
+RCS hierarchies are trees (paper sections 3.2 and 3.5): every controller takes
+commands from exactly one supervisor. Two controllers list this one in their
+`subordinates`.
+"""),
+    ("E0301", _E, "cycle in the command hierarchy", """
+Following `subordinates` from this controller leads back to it. The chain of
+command must be a tree.
+"""),
+    ("E0302", _E, "subordinate level not below its supervisor", """
+A subordinate's `level` must be lower than its supervisor's (paper section 3.5:
+levels are ordered by time horizon and span of control).
+"""),
+    ("E0303", _E, "more than one top-level controller", """
+Operator commands enter at the top of the hierarchy only (paper section 3.7), so
+all non-simulator controllers form one tree with a single root. Simulators
+(plant models) may stand outside the tree.
+"""),
+    ("W0310", _W, "too many subordinates", """
+The paper (section 3.4) recommends a span of control of about seven, and no
+more than about nine, subordinates per supervisor. A wider fan-out usually means
+a missing intermediate level.
+"""),
+    ("W0311", _W, "plan has many rules", """
+State tables of more than about ten rules are hard to review (paper section
+3.4). Consider splitting the task into sub-tasks for a subordinate.
+"""),
+    # ---- ownership ----------------------------------------------------------
+    ("E0400", _E, "Global Memory variable has more than one writer", """
+Every Global Memory variable has exactly one writer (paper section 3.8.5): one
+controller that lists it in `writes`, or the environment (`from env`) for raw
+sensor values. Two writers make the value depend on schedule order and break
+the triple-buffering contract.
+"""),
+    ("E0401", _E, "Global Memory variable is read but never written", """
+A controller reads a variable that no controller writes and that is not marked
+`from env`; its value would stay at its initial value forever.
+"""),
+    ("E0402", _E, "Global Memory variable has no initial value", """
+Every Global Memory variable needs an initial value (`gm x: f64 = 0.0`), the
+value readers see before the first write.
+"""),
+    ("W0403", _W, "Global Memory variable is never read", """
+A variable that nobody reads is dead data in every cycle's buffer exchange.
+"""),
+    # ---- plans --------------------------------------------------------------
+    ("E0500", _E, "verb has no plan", """
+Every verb a controller accepts needs a plan (a state table) with the same name
+(paper section 5.3.2.1). Without one the command would be accepted and ignored.
+"""),
+    ("E0501", _E, "plan for an undeclared verb", """
+A plan's name must be a verb the controller declares with `verb NAME` or brings
+in with `verbs SET`.
+"""),
+    ("E0502", _E, "state unreachable from `new`", """
+No sequence of rules leads from the entry state `new` to this state, so its
+rules can never fire.
+"""),
+    ("E0503", _E, "state cannot reach `done` or `error`", """
+From this state no sequence of rules ends the plan, so once there the command
+never completes. Plans that are meant to run until superseded (regulators that
+report AT_GOAL) are declared `plan NAME continuous`.
+"""),
+    ("E0504", _E, "two commands to one subordinate in one job list", """
+A job list may issue at most one command per subordinate per cycle: commands are
+not queued, and the second would silently supersede the first.
+"""),
+    ("E0505", _E, "state waits on a subordinate but ignores its error", """
+A state has a rule that waits for `SUB.done` (or another status of SUB), but no
+rule that applies in this state tests `SUB.error`. If the subordinate fails, the
+plan waits forever - the defect of rcslib's generated INIT/HALT plans. Add a
+rule such as `E9: SUB.error | * -> error(1);`.
+"""),
+    ("E0506", _E, "rule can never fire", """
+An earlier rule of the same state has a condition that is always true, so it
+always fires first (first match wins) and this rule is dead logic.
+"""),
+    ("E0507", _E, "command to a controller that is not a subordinate", """
+A controller may only command its own subordinates (chain of command, paper
+section 3.7). List the controller in `subordinates`.
+"""),
+    ("E0508", _E, "duplicate rule label", """
+Rule labels (E0, E1, ...) identify rules in traces, generated code and findings,
+so they must be unique within a plan.
+"""),
+    ("E0509", _E, "more than one `otherwise` for a state", """
+A state has at most one `otherwise` rule, the rule taken when no other rule of
+that state fires.
+"""),
+    ("E0510", _E, "invalid state in a rule", """
+`new` is the entry state and cannot be a next state (only a new command enters
+it); `done` and `error` are terminal and cannot be current states; `otherwise`
+needs a concrete current state, not `*`.
+"""),
+    ("E0511", _E, "plan has no rule for `new`", """
+When a command arrives its plan starts in state `new`. With no rule for `new`
+(or `*`), the plan never leaves it and the command is never answered.
+"""),
+    ("E0512", _E, "duplicate plan", """
+A controller has two plans with the same name.
+"""),
+    # ---- timing -------------------------------------------------------------
+    ("E0600", _E, "CPU budget exceeds its heartbeat", """
+The sum of the budgets (worst-case step times) of the controllers scheduled on a
+CPU, plus its declared overhead, must fit in one heartbeat period (paper
+sections 3.8.6 and 3.9). Otherwise cycles overrun.
+"""),
+    ("W0601", _W, "duration is not a whole number of cycles", """
+A time in a plan (`in_state >= 45 ms`) is measured in whole cycles of the CPU
+the controller runs on. A duration that is not a multiple of the heartbeat is
+rounded up to the next whole cycle; write the rounded value to say what happens.
+"""),
+    ("E0602", _E, "CPUs with non-harmonic periods exchange data", """
+When controllers on two CPUs exchange buffers, one heartbeat must be a whole
+multiple of the other so that data arrive at a fixed phase.
+"""),
+    ("E0603", _E, "controller is not scheduled", """
+Every controller must appear in exactly one CPU `schedule`; a controller that is
+never scheduled never runs.
+"""),
+    ("E0604", _E, "controller scheduled more than once", """
+A controller appears twice in schedules (on one CPU or on two). Each controller
+runs exactly once per cycle of exactly one CPU.
+"""),
+    ("E0605", _E, "design has no CPU", """
+A design needs at least one `cpu` with a heartbeat and a schedule to say where
+and how often its controllers run.
+"""),
+]
+
+CODES: dict[str, Code] = {
+    code: Code(code, sev, title, text.strip() + "\n") for code, sev, title, text in _TABLE
+}
+
+
+def explain(code: str) -> str | None:
+    c = CODES.get(code.upper())
+    if c is None:
+        return None
+    return f"{c.code} ({c.severity.value}): {c.title}\n\n{c.explanation}"

@@ -1,0 +1,118 @@
+"""Diagnostics: findings collected by every stage, never raised.
+
+A `Diagnostic` carries a stable code (see `rcsc.codes`), a severity, a short
+lowercase message, the smallest span that shows the problem with a label,
+secondary labelled spans, and free `note:` / `help:` lines.  Stages append to
+a `Diagnostics` bag; the command line renders the bag at the end (see
+`rcsc.render`).
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+from rcsc.source import Span
+
+
+class Severity(enum.Enum):
+    ERROR = "error"
+    WARNING = "warning"
+    NOTE = "note"
+
+
+@dataclass(frozen=True)
+class Label:
+    """A secondary span with a short message (rendered with `-` underlines)."""
+
+    span: Span
+    message: str
+
+
+@dataclass
+class Diagnostic:
+    code: str
+    severity: Severity
+    message: str
+    span: Span | None
+    label: str = ""
+    labels: list[Label] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    helps: list[str] = field(default_factory=list)
+    # Structured extra data (e.g. a witness of a guard finding) that the JSON
+    # and SARIF renderings carry as properties.
+    data: dict = field(default_factory=dict)
+
+    def sort_key(self) -> tuple:
+        if self.span is None:
+            return ("", 0, 0, self.code, self.message)
+        return (self.span.file.path, self.span.start, self.span.end, self.code, self.message)
+
+    def with_note(self, note: str) -> "Diagnostic":
+        self.notes.append(note)
+        return self
+
+    def with_help(self, help_: str) -> "Diagnostic":
+        self.helps.append(help_)
+        return self
+
+    def with_label(self, span: Span | None, message: str) -> "Diagnostic":
+        if span is not None:
+            self.labels.append(Label(span, message))
+        return self
+
+
+class Diagnostics:
+    """An ordered bag of findings shared by all stages of one run."""
+
+    def __init__(self) -> None:
+        self.items: list[Diagnostic] = []
+        self._seen: set[tuple] = set()
+
+    def add(
+        self,
+        code: str,
+        span: Span | None,
+        message: str,
+        label: str = "",
+        severity: Severity | None = None,
+    ) -> Diagnostic:
+        """Record a finding; the severity defaults to the code's own."""
+        from rcsc.codes import CODES
+
+        if code not in CODES:
+            raise KeyError(f"internal error: diagnostic code {code} is not registered")
+        sev = severity or CODES[code].severity
+        diag = Diagnostic(code, sev, message, span, label)
+        key = (code, message, span.file.path if span else "", span.start if span else -1)
+        if key not in self._seen:
+            self._seen.add(key)
+            self.items.append(diag)
+        return diag
+
+    def extend(self, other: "Diagnostics") -> None:
+        for d in other.items:
+            key = (d.code, d.message, d.span.file.path if d.span else "", d.span.start if d.span else -1)
+            if key not in self._seen:
+                self._seen.add(key)
+                self.items.append(d)
+
+    def sorted(self) -> list[Diagnostic]:
+        return sorted(self.items, key=Diagnostic.sort_key)
+
+    @property
+    def errors(self) -> list[Diagnostic]:
+        return [d for d in self.items if d.severity is Severity.ERROR]
+
+    @property
+    def warnings(self) -> list[Diagnostic]:
+        return [d for d in self.items if d.severity is Severity.WARNING]
+
+    def has_errors(self) -> bool:
+        return any(d.severity is Severity.ERROR for d in self.items)
+
+    def __len__(self) -> int:
+        return len(self.items)
+
+    def __iter__(self):
+        return iter(self.items)

@@ -1,0 +1,42 @@
+"""The front-end pipeline in one call: path -> files -> model -> checks (`check_path`).
+
+Every command (check, sim, build, ...) starts here, so they all see the same
+findings.  Only a root file that cannot be read raises (`InputError`, exit
+code 2); everything else is a diagnostic.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rcsc.checks import check_model
+from rcsc.diagnostics import Diagnostics
+from rcsc.loader import InputError, LoadedFile, path_to_files
+from rcsc.model import Design
+from rcsc.sema import ast_to_model
+
+__all__ = ["CheckResult", "InputError", "check_path"]
+
+
+@dataclass
+class CheckResult:
+    diags: Diagnostics
+    model: Design | None
+    files: list[LoadedFile]
+
+    @property
+    def ok(self) -> bool:
+        return not self.diags.has_errors()
+
+
+def check_path(path: str) -> CheckResult:
+    """Load, analyse and check the design whose root file is `path`."""
+    diags = Diagnostics()
+    files = path_to_files(path, diags)
+    if any(f.tree is None for f in files):
+        # A file that does not parse leaves holes that would only produce
+        # follow-on findings; report the syntax errors alone.
+        return CheckResult(diags, None, files)
+    design = ast_to_model(files, diags)
+    check_model(design, diags)
+    return CheckResult(diags, design, files)

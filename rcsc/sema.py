@@ -1,0 +1,433 @@
+"""Semantic analysis: the loaded files' ASTs to the checked design model (`ast_to_model`).
+
+It runs in passes so that declaration order never matters: (1) collect every
+top-level name, (2) resolve types, (3) constants, functions' signatures,
+verb sets and Global Memory, (4) controller interfaces (verbs, statuses,
+fields, locals), (5) bodies: function bodies, pre/post blocks and plans, and
+(6) CPUs.  Problems are collected as diagnostics; the model is always built
+(with placeholders where something was wrong) so that the structural checks
+can still run and report their own findings in the same run.
+"""
+
+from __future__ import annotations
+
+import networkx as nx
+
+from rcsc import ast
+from rcsc import model as m
+from rcsc.diagnostics import Diagnostics
+from rcsc.loader import LoadedFile
+from rcsc.source import Span
+from rcsc.typecheck import BUILTIN_FUNCS, CONVERSIONS, Checker, Globals, Scope
+from rcsc.types import BUILTIN_TYPES, ERROR, I32, EnumType, ErrorType, RecordType, Type
+
+_RESERVED = set(BUILTIN_TYPES) | set(BUILTIN_FUNCS) | CONVERSIONS | {"cmd", "in_state"}
+
+
+class _Sema:
+    def __init__(self, files: list[LoadedFile], diags: Diagnostics) -> None:
+        self.files = files
+        self.d = diags
+        self.g = Globals()
+        self.g.types.update(BUILTIN_TYPES)
+        self.g.resolve_const = self._resolve_const_lazily
+        self.decls: dict[str, ast.Node] = {}
+        self.const_ast: dict[str, ast.Const] = {}
+        self.const_busy: set[str] = set()
+        self.verbsets: dict[str, ast.VerbSet] = {}
+        self.record_ast: dict[str, ast.Record] = {}
+        self.record_busy: set[str] = set()
+
+    # ---- pass 1: names ---------------------------------------------------------
+
+    def collect(self) -> None:
+        for f in self.files:
+            if f.tree is None:
+                continue
+            for item in f.tree.items:
+                name = getattr(item, "name", None)
+                if not isinstance(name, ast.Ident):
+                    continue
+                if name.name in _RESERVED:
+                    self.d.add("E0101", name.span, f"`{name.name}` is a built-in name and cannot be redefined", "built-in name")
+                    continue
+                prev = self.decls.get(name.name)
+                if prev is not None:
+                    diag = self.d.add("E0101", name.span, f"`{name.name}` is defined more than once", "defined again here")
+                    diag.with_label(prev.name.span, "first defined here")  # type: ignore[attr-defined]
+                    continue
+                self.decls[name.name] = item
+
+    # ---- pass 2: types ---------------------------------------------------------
+
+    def types(self) -> None:
+        for name, item in self.decls.items():
+            if isinstance(item, ast.Enum):
+                members: list[str] = []
+                for mem in item.members:
+                    if mem.name in members:
+                        self.d.add("E0101", mem.span, f"enum member `{mem.name}` is defined more than once", "repeated member")
+                    else:
+                        members.append(mem.name)
+                if not members:
+                    self.d.add("E0101", item.name.span, f"enum `{name}` has no members", "empty enum")
+                self.g.types[name] = EnumType(name, tuple(members), item.span)
+            elif isinstance(item, ast.Record):
+                self.record_ast[name] = item
+        for name in self.record_ast:
+            self._record(name)
+
+    def _record(self, name: str) -> Type:
+        if name in self.g.types:
+            return self.g.types[name]
+        item = self.record_ast[name]
+        if name in self.record_busy:
+            self.d.add("E0102", item.name.span, f"record `{name}` contains itself", "recursive record")
+            return ERROR
+        self.record_busy.add(name)
+        fields: list[tuple[str, Type]] = []
+        for f in item.fields:
+            if any(f.name.name == n for n, _ in fields):
+                self.d.add("E0101", f.name.span, f"field `{f.name.name}` is defined more than once", "repeated field")
+                continue
+            fields.append((f.name.name, self.type_ref(f.type)))
+        self.record_busy.discard(name)
+        t = RecordType(name, tuple(fields), item.span)
+        self.g.types[name] = t
+        return t
+
+    def type_ref(self, ref: ast.TypeRef) -> Type:
+        n = ref.name.name
+        if n in self.g.types:
+            return self.g.types[n]
+        if n in self.record_ast:
+            return self._record(n)
+        diag = self.d.add("E0102", ref.name.span, f"unknown type `{n}`", "not a type")
+        diag.with_note("types: bool, i32, i64, u32, f64, duration, and declared enums and records")
+        return ERROR
+
+    def range_of(self, ref: ast.TypeRef, t: Type, checker: Checker) -> m.Range | None:
+        if ref.lo is None or ref.hi is None:
+            return None
+        if not t.is_numeric:
+            if not isinstance(t, ErrorType):
+                self.d.add("E0206", ref.span, f"a range needs a numeric type, not `{t}`", "not numeric")
+            return None
+        lo = checker.constant(ref.lo, t, "a range bound")
+        hi = checker.constant(ref.hi, t, "a range bound")
+        if lo is None or hi is None:
+            return None
+        if lo.value > hi.value:  # type: ignore[operator]
+            self.d.add("E0206", ref.span, "empty range: the lower bound is above the upper bound", "empty range")
+            return None
+        return m.Range(lo.value, hi.value)  # type: ignore[arg-type]
+
+    def check_in_range(self, value, rng: m.Range | None, span: Span) -> None:
+        if rng is None or not isinstance(value, (int, float)) or isinstance(value, bool):
+            return
+        if not (rng.lo <= value <= rng.hi):
+            self.d.add("E0206", span, f"value {value} is outside the declared range {rng.lo}..{rng.hi}", "out of range")
+
+    # ---- pass 3: constants, functions, verb sets, Global Memory -----------------
+
+    def _resolve_const_lazily(self, name: str) -> bool:
+        if name in self.g.consts:
+            return True
+        item = self.const_ast.get(name)
+        if item is None:
+            return False
+        if name in self.const_busy:
+            self.d.add("E0204", item.name.span, f"constant `{name}` depends on itself", "circular constant")
+            return False
+        self.const_busy.add(name)
+        self._const(item)
+        self.const_busy.discard(name)
+        return name in self.g.consts
+
+    def _const(self, item: ast.Const) -> None:
+        t = self.type_ref(item.type)
+        checker = Checker(Scope(self.g, const_only=True), self.d)
+        value = checker.constant(item.value, t, "a constant's value") if not isinstance(t, ErrorType) else None
+        if value is None:
+            self.g.consts[item.name.name] = m.ConstDef(item.name.name, ERROR, 0, item.span)
+            return
+        self.check_in_range(value.value, self.range_of(item.type, t, checker), item.value.span)
+        self.g.consts[item.name.name] = m.ConstDef(item.name.name, t, value.value, item.span)
+
+    def globals_(self) -> None:
+        for name, item in self.decls.items():
+            if isinstance(item, ast.Const):
+                self.const_ast[name] = item
+        for name in self.const_ast:
+            self._resolve_const_lazily(name)
+        const_checker = Checker(Scope(self.g, const_only=True), self.d)
+        for name, item in self.decls.items():
+            if isinstance(item, (ast.Function, ast.Extern)):
+                params = self.params(item.params, const_checker)
+                fn = m.Function(name, params, self.type_ref(item.ret), item.span, extern=isinstance(item, ast.Extern))
+                if isinstance(item, ast.Extern):
+                    fn.budget_ns = item.budget.nanos
+                fn.module = item.span.file.path
+                self.g.functions[name] = fn
+            elif isinstance(item, ast.VerbSet):
+                self.verbsets[name] = item
+            elif isinstance(item, ast.GmVar):
+                t = self.type_ref(item.type)
+                var = m.Var(name, t, item.span, from_env=item.from_env)
+                var.range = self.range_of(item.type, t, const_checker)
+                if item.init is None:
+                    self.d.add("E0402", item.name.span, f"Global Memory variable `{name}` has no initial value", "no initial value").with_help(
+                        f"give it one: `gm {name}: {t} = ...`"
+                    )
+                elif not isinstance(t, ErrorType):
+                    value = const_checker.constant(item.init, t, "an initial value")
+                    if value is not None:
+                        var.init = value.value
+                        self.check_in_range(value.value, var.range, item.init.span)
+                self.g.gm[name] = var
+
+    def params(self, params: list[ast.Param], checker: Checker) -> list[m.Var]:
+        out: list[m.Var] = []
+        for p in params:
+            if any(q.name == p.name.name for q in out):
+                self.d.add("E0101", p.name.span, f"parameter `{p.name.name}` is defined more than once", "repeated parameter")
+                continue
+            t = self.type_ref(p.type)
+            out.append(m.Var(p.name.name, t, p.span, range=self.range_of(p.type, t, checker)))
+        return out
+
+    # ---- pass 4: controller interfaces ------------------------------------------
+
+    def interfaces(self) -> None:
+        for name, item in self.decls.items():
+            if isinstance(item, ast.Controller):
+                self.g.controllers[name] = self.interface(item)
+
+    def interface(self, item: ast.Controller) -> m.Controller:
+        name = item.name.name
+        level, level_span = self._single(item.level, item, "level", lambda v: v[0], lambda v: v[1])
+        budget, budget_span = self._single(item.budget, item, "budget", lambda v: v.nanos, lambda v: v.span)
+        c = m.Controller(name, item.span, item.name.span, item.simulator, level or 0, budget or 0)
+        c.level_span, c.budget_span = level_span, budget_span
+        c.subordinates = self._names(item.subordinates, "subordinate")
+        c.reads = self._names(item.reads, "read")
+        c.writes = self._names(item.writes, "write")
+        for use in c.reads + c.writes:
+            if use.name not in self.g.gm:
+                diag = self.d.add("E0100", use.span, f"no Global Memory variable named `{use.name}`", "not declared")
+                self.g.poisoned.add(use.name)
+                diag.with_help(f"declare it: `gm {use.name}: TYPE = VALUE`")
+        checker = Checker(Scope(self.g, const_only=True), self.d)
+        verbs = list(item.verbs)
+        uses: list[Span | None] = [None] * len(verbs)
+        for ref in item.verb_sets:
+            vs = self.verbsets.get(ref.name)
+            if vs is None:
+                self.d.add("E0106", ref.span, f"no verb set named `{ref.name}`", "unknown verb set")
+                continue
+            verbs.extend(vs.verbs)
+            uses.extend([ref.span] * len(vs.verbs))
+        for v, use in zip(verbs, uses):
+            if v.name.name in c.verbs:
+                self.d.add("E0101", use or v.name.span, f"verb `{v.name.name}` is declared more than once in `{name}`", "repeated verb")
+                continue
+            verb = m.Verb(v.name.name, self.params(v.params, checker), v.span)
+            verb.use_span = use or v.name.span
+            c.verbs[v.name.name] = verb
+        number = m.FIRST_EXTRA_STATUS
+        for nl in item.reports:
+            for ident in nl.names:
+                if ident.name in c.statuses or ident.name in ("DONE", "EXEC", "ERROR", "UNINITIALIZED"):
+                    self.d.add("E0101", ident.span, f"status value `{ident.name}` is defined more than once", "repeated status value")
+                    continue
+                c.statuses[ident.name] = number
+                c.status_spans[ident.name] = ident.span
+                number += 1
+        for decl, table, what in [(d, c.status_fields, "status field") for d in item.status_fields] + [
+            (d, c.locals, "local") for d in item.locals
+        ]:
+            n = decl.name.name
+            if n in c.status_fields or n in c.locals or n in ("cmd", "in_state"):
+                self.d.add("E0101", decl.name.span, f"`{n}` is defined more than once in `{name}`", f"repeated {what}")
+                continue
+            t = self.type_ref(decl.type)
+            var = m.Var(n, t, decl.span, range=self.range_of(decl.type, t, checker))
+            if not isinstance(t, ErrorType):
+                value = checker.constant(decl.init, t, "an initial value")
+                if value is not None:
+                    var.init = value.value
+                    self.check_in_range(value.value, var.range, decl.init.span)
+            table[n] = var
+        return c
+
+    def _single(self, values, item: ast.Controller, what: str, get, span_of):
+        if not values:
+            self.d.add("E0209", item.name.span, f"controller `{item.name.name}` has no `{what}`", f"no `{what}`").with_help(
+                f"write it in the header: `controller {item.name.name} level 2 budget 1 ms {{`"
+            )
+            return None, None
+        for extra in values[1:]:
+            self.d.add("E0209", span_of(extra), f"`{what}` is given more than once", f"repeated `{what}`")
+        return get(values[0]), span_of(values[0])
+
+    def _names(self, lists: list[ast.NameList], what: str) -> list[m.NameUse]:
+        out: list[m.NameUse] = []
+        for nl in lists:
+            for ident in nl.names:
+                if any(u.name == ident.name for u in out):
+                    self.d.add("E0101", ident.span, f"`{ident.name}` is listed more than once", f"repeated {what}")
+                    continue
+                out.append(m.NameUse(ident.name, ident.span))
+        return out
+
+    # ---- pass 5: bodies ---------------------------------------------------------
+
+    def bodies(self) -> None:
+        for name, item in self.decls.items():
+            if isinstance(item, ast.Function):
+                fn = self.g.functions[name]
+                scope = Scope(self.g, fn_params={p.name: p for p in fn.params}, pure=True)
+                fn.body = Checker(scope, self.d).expect(item.body, fn.ret, f"the result of `{name}`")
+        self._recursion()
+        for name, item in self.decls.items():
+            if isinstance(item, ast.Controller):
+                self.controller_body(self.g.controllers[name], item)
+
+    def _recursion(self) -> None:
+        graph = nx.DiGraph()
+        for fn in self.g.functions.values():
+            graph.add_node(fn.name)
+            if fn.body is None:
+                continue
+            for e in m.walk_expr(fn.body):
+                if isinstance(e, m.Call) and e.kind == "fn":
+                    graph.add_edge(fn.name, e.func)
+        for cycle in sorted(nx.simple_cycles(graph), key=lambda c: sorted(c)):
+            first = min(cycle)
+            fn = self.g.functions[first]
+            item = self.decls[first]
+            path = " -> ".join(cycle[cycle.index(first):] + cycle[: cycle.index(first)] + [first])
+            self.d.add("E0205", item.name.span, f"function `{first}` is recursive", "calls itself").with_note(  # type: ignore[attr-defined]
+                f"call cycle: {path}"
+            )
+            fn.body = m.Const(fn.span, ERROR, 0)  # never evaluate it
+        # Recursive functions are cut off above, so folding and simulation stay finite.
+
+    def controller_body(self, c: m.Controller, item: ast.Controller) -> None:
+        scope = Scope(self.g, controller=c)
+        checker = Checker(scope, self.d)
+        for _, block in item.pre:
+            c.pre.extend(checker.stmts(block, allow_commands=False))
+        for _, block in item.post:
+            c.post.extend(checker.stmts(block, allow_commands=False))
+        for plan in item.plans:
+            verb_name = plan.name.name
+            if verb_name in c.plans:
+                diag = self.d.add("E0512", plan.name.span, f"`{c.name}` has two plans for `{verb_name}`", "second plan")
+                diag.with_label(c.plans[verb_name].name_span, "first plan")
+                continue
+            verb = c.verbs.get(verb_name)
+            if verb is None:
+                diag = self.d.add("E0501", plan.name.span, f"plan `{verb_name}` is for a verb `{c.name}` does not declare", "no such verb")
+                diag.with_help(f"declare it: `verb {verb_name}`")
+                verb = m.Verb(verb_name, [], plan.name.span)
+            c.plans[verb_name] = self.plan(c, verb, plan)
+        for v in c.verbs.values():
+            if v.name not in c.plans:
+                diag = self.d.add("E0500", v.use_span, f"verb `{v.name}` of `{c.name}` has no plan", "no plan for this verb")
+                diag.with_help(f"add `plan {v.name} {{ ... }}` to `{c.name}`")
+
+    def plan(self, c: m.Controller, verb: m.Verb, plan: ast.Plan) -> m.Plan:
+        scope = Scope(self.g, controller=c, verb=verb, in_plan=True)
+        checker = Checker(scope, self.d)
+        const_checker = Checker(Scope(self.g, const_only=True), self.d)
+        rules: list[m.Rule] = []
+        labels: dict[str, Span] = {}
+        for i, r in enumerate(plan.rules):
+            if r.label.name in labels:
+                diag = self.d.add("E0508", r.label.span, f"rule label `{r.label.name}` is used twice in plan `{verb.name}`", "repeated label")
+                diag.with_label(labels[r.label.name], "first used here")
+            else:
+                labels[r.label.name] = r.label.span
+            state = m.StateRef(r.state.kind, r.state.name, r.state.span)
+            if state.kind == "named" and state.name in ("done", "error"):
+                self.d.add("E0510", r.state.span, f"`{state.name}` is terminal and cannot be a current state", "terminal state").with_note(
+                    "after `done` or `error` the plan is idle until the next command"
+                )
+            if r.guard is None and state.kind == "any":
+                self.d.add("E0510", r.state.span, "`otherwise` needs a concrete state, not `*`", "`*` here").with_help(
+                    "use a rule with condition `true` for a catch-all in every state"
+                )
+            guard = checker.condition(r.guard) if r.guard is not None else None
+            nxt = m.StateRef(r.next.kind, r.next.name, r.next.span)
+            if nxt.kind == "new":
+                self.d.add("E0510", r.next.span, "`new` cannot be a next state", "entry state").with_note(
+                    "only a new command enters `new`"
+                )
+            if nxt.kind == "error" and r.next.code is not None:
+                code = const_checker.constant(r.next.code, I32, "an error code")
+                nxt.code = int(code.value) if code is not None and isinstance(code.value, int) else 0
+            jobs = checker.stmts(r.jobs, allow_commands=True)
+            rules.append(m.Rule(i, r.label.name, r.span, r.label.span, state, guard, r.guard_span, nxt, jobs))
+        return m.Plan(verb.name, plan.span, plan.name.span, plan.continuous, rules)
+
+    # ---- pass 6: CPUs -----------------------------------------------------------
+
+    def cpus(self) -> dict[str, m.Cpu]:
+        out: dict[str, m.Cpu] = {}
+        for name, item in self.decls.items():
+            if not isinstance(item, ast.Cpu):
+                continue
+            hb = item.heartbeat[0] if item.heartbeat else None
+            if hb is None:
+                self.d.add("E0209", item.name.span, f"cpu `{name}` has no `heartbeat`", "no heartbeat").with_help(
+                    "add `heartbeat 30 ms` (the cycle period)"
+                )
+            elif hb.nanos <= 0:
+                self.d.add("E0209", hb.span, "the heartbeat must be longer than zero", "zero period")
+            for extra in item.heartbeat[1:]:
+                self.d.add("E0209", extra.span, "`heartbeat` is given more than once", "repeated `heartbeat`")
+            for extra in item.overhead[1:]:
+                self.d.add("E0209", extra.span, "`overhead` is given more than once", "repeated `overhead`")
+            if not item.schedule:
+                self.d.add("E0209", item.name.span, f"cpu `{name}` has no `schedule`", "no schedule")
+            schedule = self._names(item.schedule, "controller")
+            for use in schedule:
+                if use.name not in self.g.controllers:
+                    self.d.add("E0104", use.span, f"no controller named `{use.name}`", "unknown controller")
+            schedule = [u for u in schedule if u.name in self.g.controllers]
+            cpu = m.Cpu(name, item.span, item.name.span, hb.nanos if hb else 0, item.overhead[0].nanos if item.overhead else 0, schedule)
+            cpu.heartbeat_span = hb.span if hb else None
+            out[name] = cpu
+        return out
+
+
+def ast_to_model(files: list[LoadedFile], diags: Diagnostics) -> m.Design:
+    """Resolve and type-check the loaded files into one design model."""
+    root = next((f for f in files if f.is_root), files[0])
+    name = root.tree.name.name if root.tree is not None and root.tree.name is not None else "design"
+    s = _Sema(files, diags)
+    s.collect()
+    s.types()
+    s.globals_()
+    s.interfaces()
+    for name_, item in s.decls.items():  # subordinates that are not controllers
+        if isinstance(item, ast.Controller):
+            for use in s.g.controllers[name_].subordinates:
+                if use.name not in s.g.controllers:
+                    s.d.add("E0104", use.span, f"no controller named `{use.name}`", "unknown controller")
+                    s.g.poisoned.add(use.name)
+    for c in s.g.controllers.values():
+        c.subordinates = [u for u in c.subordinates if u.name in s.g.controllers]
+    s.bodies()
+    head = root.tree.name.span if root.tree is not None and root.tree.name is not None else Span(root.source, 0, 0)
+    design = m.Design(name, head)
+    design.enums = {k: t for k, t in s.g.types.items() if isinstance(t, EnumType)}
+    design.records = {k: t for k, t in s.g.types.items() if isinstance(t, RecordType)}
+    design.consts = dict(s.g.consts)
+    design.gm = dict(s.g.gm)
+    design.functions = dict(s.g.functions)
+    design.controllers = dict(s.g.controllers)
+    design.cpus = s.cpus()
+    design.files = [f.source.path for f in files]
+    return design

@@ -1,0 +1,89 @@
+"""Source files and spans.
+
+A `Span` is a half-open byte range [start, end) in one `SourceFile`, the
+smallest piece of text a diagnostic points at.  Line and column numbers are
+1-based and computed on demand from the file's line table, so spans stay cheap
+to create in large designs.
+"""
+
+from __future__ import annotations
+
+import bisect
+from dataclasses import dataclass, field
+
+
+@dataclass(eq=False)
+class SourceFile:
+    """One file of a design: its display path and its text."""
+
+    path: str
+    text: str
+    _line_starts: list[int] = field(default_factory=list, repr=False)
+
+    def __post_init__(self) -> None:
+        starts = [0]
+        for i, ch in enumerate(self.text):
+            if ch == "\n":
+                starts.append(i + 1)
+        self._line_starts = starts
+
+    def line_col(self, offset: int) -> tuple[int, int]:
+        """1-based (line, column) of a character offset."""
+        offset = max(0, min(offset, len(self.text)))
+        line = bisect.bisect_right(self._line_starts, offset) - 1
+        return line + 1, offset - self._line_starts[line] + 1
+
+    def line_text(self, line: int) -> str:
+        """The text of 1-based line `line`, without its newline."""
+        if line < 1 or line > len(self._line_starts):
+            return ""
+        start = self._line_starts[line - 1]
+        end = self.text.find("\n", start)
+        return self.text[start:] if end < 0 else self.text[start:end]
+
+    @property
+    def line_count(self) -> int:
+        return len(self._line_starts)
+
+
+@dataclass(frozen=True)
+class Span:
+    """A half-open character range [start, end) of a source file."""
+
+    file: SourceFile
+    start: int
+    end: int
+
+    @property
+    def line(self) -> int:
+        return self.file.line_col(self.start)[0]
+
+    @property
+    def col(self) -> int:
+        return self.file.line_col(self.start)[1]
+
+    @property
+    def end_line_col(self) -> tuple[int, int]:
+        return self.file.line_col(max(self.start, self.end))
+
+    @property
+    def text(self) -> str:
+        return self.file.text[self.start:self.end]
+
+    def to(self, other: "Span") -> "Span":
+        """The span covering both `self` and `other` (same file)."""
+        return Span(self.file, min(self.start, other.start), max(self.end, other.end))
+
+    def __repr__(self) -> str:
+        return f"Span({self.file.path}:{self.line}:{self.col})"
+
+    def __hash__(self) -> int:  # SourceFile compares by identity
+        return hash((id(self.file), self.start, self.end))
+
+    def __eq__(self, other: object) -> bool:
+        return (
+            isinstance(other, Span)
+            and other.file is self.file
+            and other.start == self.start
+            and other.end == self.end
+        )

@@ -1,0 +1,1 @@
+"""The rcsc standard library, written in the RCS language itself (data package)."""
