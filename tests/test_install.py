@@ -1,0 +1,52 @@
+"""An installed rcsc works outside the checkout.
+
+Builds a wheel, installs it (without dependencies: they come from the test
+environment) into a fresh virtual environment, and runs the installed `rcsc`
+from a temporary folder on a copy of an example, so the grammar and the
+standard library must come from inside the installed package.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_installed_wheel_checks_a_design_from_another_folder(tmp_path: Path) -> None:
+    wheel_dir = tmp_path / "wheel"
+    subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(wheel_dir), str(ROOT)],
+        check=True,
+        cwd=tmp_path,
+    )
+    (wheel,) = wheel_dir.glob("rcsc-*.whl")
+    names = zipfile.ZipFile(wheel).namelist()
+    assert "rcsc/grammar/rcs.lark" in names
+    assert "rcsc/stdlib/std/math.rcs" in names
+    assert "rcsc/stdlib/std/lifecycle.rcs" in names
+
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
+    py = venv / "bin" / "python"
+    subprocess.run([str(py), "-m", "pip", "install", "-q", "--no-deps", "--force-reinstall", str(wheel)], check=True)
+
+    work = tmp_path / "elsewhere"
+    shutil.copytree(ROOT / "examples" / "submarine", work)
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    where = subprocess.run(
+        [str(py), "-c", "import rcsc, rcsc.parse; print(rcsc.__file__)"], check=True, cwd=work, env=env, capture_output=True, text=True
+    ).stdout.strip()
+    assert where.startswith(str(venv)), f"imported rcsc from {where}, not from the installed wheel"
+
+    result = subprocess.run(
+        [str(venv / "bin" / "rcsc"), "check", "submarine.rcs"], cwd=work, env=env, capture_output=True, text=True
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    result = subprocess.run([str(py), "-m", "rcsc", "check", "submarine.rcs", "--format", "short"], cwd=work, env=env, capture_output=True, text=True)
+    assert result.returncode == 0, result.stdout + result.stderr
