@@ -287,6 +287,35 @@ never scheduled never runs.
 A controller appears twice in schedules (on one CPU or on two). Each controller
 runs exactly once per cycle of exactly one CPU.
 """),
+    ("E0606", _E, "the simulator runs single-CPU designs", """
+The reference simulator (`rcsc sim`, `rcsc test`) steps one CPU's schedule. A
+design with several CPUs is checked, but simulating the buffer exchange between
+CPUs is not implemented yet.
+"""),
+    # ---- scenarios ----------------------------------------------------------
+    ("E0700", _E, "operator command to a controller below the top", """
+Operator commands enter at the top of the hierarchy only (chain of command,
+paper section 3.7). A scenario may command a controller that has no
+supervisor; the rest receive commands from their supervisors' plans.
+"""),
+    ("E0701", _E, "scenario input to a variable the environment does not write", """
+A scenario sets only Global Memory variables declared `from env` (raw sensors,
+operator inputs). Every other variable has a controller as its one writer.
+"""),
+    ("E0702", _E, "cycle outside the scenario", """
+Cycles are numbered from 1 to the scenario's `cycles`. A command, input or
+expectation outside that range, or a window `within A..B` with A after B, would
+never happen.
+"""),
+    ("E0703", _E, "unknown state, status, rule or verb in an expectation", """
+`CTRL.state == NAME` compares with a state of one of CTRL's plans (or `new`,
+`done`, `error`); `CTRL.status == NAME` with DONE, EXEC, ERROR, UNINITIALIZED
+or an extra status value; `CTRL.rule` with a rule label; `CTRL.verb` with a verb.
+A name that CTRL does not have is almost always a typo.
+"""),
+    ("E0704", _E, "missing or repeated scenario setting", """
+A scenario says once how many cycles it runs: `cycles 200`.
+"""),
     ("E0605", _E, "design has no CPU", """
 A design needs at least one `cpu` with a heartbeat and a schedule to say where
 and how often its controllers run.

@@ -40,6 +40,10 @@ class Env:
     def function(self, name: str) -> m.Function:
         raise NotConstant(None)  # type: ignore[arg-type]
 
+    def other(self, e: m.Expr):
+        """A node that only this environment understands (e.g. a scenario's observation)."""
+        raise NotConstant(e)
+
 
 CONST_ENV = Env()
 
@@ -135,7 +139,7 @@ def eval_expr(e: m.Expr, env: Env = CONST_ENV, fn_args: dict | None = None):
     if isinstance(e, m.Call):
         args = [eval_expr(a, env, fn_args) for a in e.args]
         return _call(e, args, env)
-    raise TypeError(f"cannot evaluate {type(e).__name__}")
+    return env.other(e)
 
 
 def _call(e: m.Call, args: list, env: Env):
