@@ -94,6 +94,8 @@ only use a verb that the subordinate accepts (paper section 5.3.2).
 """),
     ("E0106", _E, "unknown verb set", """
 `verbs NAME` in a controller names no `verbset` of the design or its imports.
+Declare the verb set, import the module that has it (`import std.lifecycle`
+for `Lifecycle`), or list the verbs one by one with `verb`.
 """),
     ("E0107", _E, "unknown status value", """
 `report NAME` names a status value the controller did not declare with
@@ -207,6 +209,7 @@ value readers see before the first write.
 """),
     ("W0403", _W, "Global Memory variable is never read", """
 A variable that nobody reads is dead data in every cycle's buffer exchange.
+Remove it, or add it to the `reads` of the controller that is meant to use it.
 """),
     # ---- plans --------------------------------------------------------------
     ("E0500", _E, "verb has no plan", """
@@ -262,7 +265,9 @@ When a command arrives its plan starts in state `new`. With no rule for `new`
 (or `*`), the plan never leaves it and the command is never answered.
 """),
     ("E0512", _E, "duplicate plan", """
-A controller has two plans with the same name.
+A controller has two plans with the same name. Each verb has exactly one plan
+(its state table), so a second plan for the same verb is either a leftover copy
+or a misspelt verb name.
 """),
     # ---- timing -------------------------------------------------------------
     ("E0600", _E, "CPU budget exceeds its heartbeat", """
@@ -314,7 +319,8 @@ or an extra status value; `CTRL.rule` with a rule label; `CTRL.verb` with a verb
 A name that CTRL does not have is almost always a typo.
 """),
     ("E0704", _E, "missing or repeated scenario setting", """
-A scenario says once how many cycles it runs: `cycles 200`.
+A scenario says exactly once how many cycles it runs: `cycles 200`. Without it
+the run has no end; with two `cycles` lines it is ambiguous which one counts.
 """),
     ("E0605", _E, "design has no CPU", """
 A design needs at least one `cpu` with a heartbeat and a schedule to say where

@@ -17,7 +17,6 @@ later ones in the next cycle.
 
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass, field
 
 from rcsc import model as m
@@ -26,6 +25,17 @@ from rcsc.types import BOOL, DURATION, F64, EnumType, FloatType, IntType, Record
 
 STATUS_NAMES = {m.UNINITIALIZED: "UNINITIALIZED", m.DONE: "DONE", m.EXEC: "EXEC", m.ERROR: "ERROR"}
 SERIAL_MAX = U32.max
+
+
+def clone(value):
+    """A copy of a value: scalars are immutable, records (dicts) are copied deeply."""
+    if isinstance(value, dict):
+        return {k: clone(v) for k, v in value.items()}
+    return value
+
+
+def _clone_status(st: "StatusBuffer") -> "StatusBuffer":
+    return StatusBuffer(st.echo_serial, st.status, st.state, st.rule, st.error_code, st.stamp, st.verb, clone(st.fields))
 
 
 def next_serial(serial: int) -> int:
@@ -76,8 +86,8 @@ class ControllerRuntime:
 
     def __init__(self, c: m.Controller) -> None:
         self.c = c
-        self.status = StatusBuffer(fields={n: copy.deepcopy(v.init) for n, v in c.status_fields.items()})
-        self.locals = {n: copy.deepcopy(v.init) for n, v in c.locals.items()}
+        self.status = StatusBuffer(fields={n: clone(v.init) for n, v in c.status_fields.items()})
+        self.locals = {n: clone(v.init) for n, v in c.locals.items()}
         self.fields = self.status.fields
         self.cmd = CommandBuffer()
         self.subs: dict[str, StatusBuffer] = {}
@@ -88,6 +98,7 @@ class ControllerRuntime:
         self.idle = True
         self.entry_cycle = 0
         self.steps = 0
+        self.gm_uses = c.reads + c.writes
 
 
 class _StepEnv(Env):
@@ -155,9 +166,9 @@ class Simulator:
         self.period_ns = self.cpu.heartbeat_ns
         self.externs = externs or {}
         self.cycle = 0
-        self.gm = {n: copy.deepcopy(v.init) for n, v in design.gm.items()}
+        self.gm = {n: clone(v.init) for n, v in design.gm.items()}
         self.commands = {n: CommandBuffer() for n in design.controllers}
-        self.statuses = {n: StatusBuffer(fields={k: copy.deepcopy(v.init) for k, v in c.status_fields.items()}) for n, c in design.controllers.items()}
+        self.statuses = {n: StatusBuffer(fields={k: clone(v.init) for k, v in c.status_fields.items()}) for n, c in design.controllers.items()}
         self.runtimes = {n: ControllerRuntime(c) for n, c in design.controllers.items()}
         self.schedule = [design.controllers[u.name] for u in self.cpu.schedule]
         self.operator_serial: dict[str, int] = {}
@@ -171,7 +182,7 @@ class Simulator:
         return serial
 
     def set_input(self, name: str, value) -> None:
-        self.gm[name] = copy.deepcopy(value)
+        self.gm[name] = clone(value)
 
     # ---- the cycle -------------------------------------------------------------
 
@@ -188,9 +199,10 @@ class Simulator:
         c = rt.c
         env = _StepEnv(self, rt)
         # 1. Read: copies of the command, the subordinates' status and Global Memory.
-        rt.cmd = copy.deepcopy(self.commands[c.name])
-        rt.subs = {u.name: copy.deepcopy(self.statuses[u.name]) for u in c.subordinates}
-        rt.gm = {u.name: copy.deepcopy(self.gm[u.name]) for u in c.reads + c.writes}
+        cmd = self.commands[c.name]
+        rt.cmd = CommandBuffer(cmd.serial, cmd.verb, clone(cmd.args))
+        rt.subs = {u.name: self.statuses[u.name] for u in c.subordinates}  # read-only; replaced, never mutated
+        rt.gm = {u.name: clone(self.gm[u.name]) for u in rt.gm_uses}
         rt.pending = {}
         # 2. Pre.
         self.exec_block(c.pre, rt, env)
@@ -217,9 +229,9 @@ class Simulator:
         self.exec_block(c.post, rt, env)
         # 6. Write.
         st.stamp = self.cycle
-        self.statuses[c.name] = copy.deepcopy(st)
+        self.statuses[c.name] = _clone_status(st)
         for use in c.writes:
-            self.gm[use.name] = copy.deepcopy(rt.gm[use.name])
+            self.gm[use.name] = clone(rt.gm[use.name])
         for sub, (verb, args) in rt.pending.items():
             serial = next_serial(rt.last_sent[sub])
             rt.last_sent[sub] = serial
@@ -291,11 +303,11 @@ class Simulator:
         store = {"gm": rt.gm, "local": rt.locals, "status": rt.fields}[s.target.kind]
         container, key = store, s.target.name
         for part in s.target.path:
-            container[key] = copy.deepcopy(container[key])
+            container[key] = clone(container[key])
             container, key = container[key], part
         if s.op != "=":
             value = _arith(s.op[0], container[key], value, s.target.type)
-        container[key] = copy.deepcopy(value)
+        container[key] = clone(value)
 
     # ---- observation -----------------------------------------------------------
 

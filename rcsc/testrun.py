@@ -1,0 +1,170 @@
+"""`rcsc test`: find scenarios, run them, report like a test runner (`run_tests`).
+
+Where scenarios live: `*.scn` files beside a design file or in a
+`scenarios/` folder next to it.  A design file is a `.rcs` file that begins
+with `design NAME` (after comments).  Paths given on the command line may be
+design files, scenario files or folders (searched recursively).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+from dataclasses import dataclass, field
+from xml.sax.saxutils import escape, quoteattr
+
+from rcsc.diagnostics import Diagnostics
+from rcsc.driver import check_path
+from rcsc.loader import InputError
+from rcsc.runner import RunResult, run_scenario
+from rcsc.scenario import text_to_scenario
+from rcsc.source import SourceFile
+
+_DESIGN_HEADER = re.compile(r"\A(?:\s|//[^\n]*\n|/\*.*?\*/)*design\s", re.S)
+
+
+def is_design_file(path: str) -> bool:
+    if not path.endswith(".rcs"):
+        return False
+    try:
+        with open(path, encoding="utf-8") as fh:
+            head = fh.read(65536)
+    except (OSError, UnicodeDecodeError):
+        return False
+    return bool(_DESIGN_HEADER.match(head))
+
+
+def scenarios_of(design_path: str) -> list[str]:
+    folder = os.path.dirname(design_path) or "."
+    found = []
+    for where in (folder, os.path.join(folder, "scenarios")):
+        if os.path.isdir(where):
+            found += [os.path.join(where, f) for f in sorted(os.listdir(where)) if f.endswith(".scn")]
+    return found
+
+
+def design_of(scenario_path: str) -> str | None:
+    """The design a scenario belongs to: the one design file in its folder or the folder above."""
+    folder = os.path.dirname(scenario_path) or "."
+    for where in (folder, os.path.dirname(os.path.abspath(folder))):
+        designs = [os.path.join(where, f) for f in sorted(os.listdir(where)) if is_design_file(os.path.join(where, f))]
+        if len(designs) == 1:
+            return designs[0] if where == folder else os.path.relpath(designs[0])
+    return None
+
+
+def discover(paths: list[str]) -> tuple[list[tuple[str, list[str]]], list[str]]:
+    """[(design, [scenario, ...])] in a stable order, and problems found on the way."""
+    plan: dict[str, list[str]] = {}
+    problems: list[str] = []
+    for p in paths:
+        if os.path.isdir(p):
+            for root, dirs, files in os.walk(p):
+                dirs[:] = sorted(d for d in dirs if not d.startswith(".") and d not in ("__pycache__", "node_modules"))
+                for f in sorted(files):
+                    full = os.path.join(root, f)
+                    if is_design_file(full):
+                        plan.setdefault(full, []).extend(scenarios_of(full))
+        elif p.endswith(".scn") and os.path.isfile(p):
+            d = design_of(p)
+            if d is None:
+                problems.append(f"{p}: no single design file beside it or in the folder above")
+            else:
+                plan.setdefault(d, []).append(p)
+        elif os.path.isfile(p):
+            plan.setdefault(p, []).extend(scenarios_of(p))
+        else:
+            problems.append(f"{p}: no such file or folder")
+    return [(d, sorted(set(s))) for d, s in plan.items()], problems
+
+
+@dataclass
+class Outcome:
+    design: str
+    scenario: str
+    passed: bool
+    seconds: float
+    cycles: int = 0
+    message: str = ""  # failure report (several lines) or error text
+    diags: Diagnostics | None = None
+    result: RunResult | None = None
+
+
+@dataclass
+class Report:
+    outcomes: list[Outcome] = field(default_factory=list)
+
+    @property
+    def failed(self) -> int:
+        return sum(not o.passed for o in self.outcomes)
+
+    @property
+    def passed(self) -> int:
+        return sum(o.passed for o in self.outcomes)
+
+
+def failure_text(result: RunResult) -> str:
+    lines = []
+    for r in result.results:
+        if r.passed:
+            continue
+        x = r.expect
+        when = {"at": f"at {x.lo}", "within": f"within {x.lo}..{x.hi}", "always": "always", "final": "final"}[x.kind]
+        lines.append(f"expect {when}: {x.text}")
+        lines.append(f"  {x.span.file.path}:{x.span.line}:{x.span.col}")
+        seen = "never true in the window; at cycle" if x.kind == "within" else "false at cycle"
+        values = ", ".join(f"{k} = {v}" for k, v in r.values) or "(no inputs)"
+        lines.append(f"  {seen} {r.cycle}: {values}")
+    return "\n".join(lines)
+
+
+def run_one(design_path: str, scenario_path: str, design_cache: dict) -> Outcome:
+    start = time.perf_counter()
+    if design_path not in design_cache:
+        try:
+            design_cache[design_path] = check_path(design_path)
+        except InputError as exc:
+            design_cache[design_path] = exc
+    checked = design_cache[design_path]
+    if isinstance(checked, InputError):
+        return Outcome(design_path, scenario_path, False, 0.0, message=str(checked))
+    if not checked.ok or checked.model is None:
+        return Outcome(design_path, scenario_path, False, 0.0, message="the design has errors (run `rcsc check`)", diags=checked.diags)
+    if len(checked.model.cpus) != 1:
+        return Outcome(design_path, scenario_path, False, 0.0, message="the simulator runs single-CPU designs")
+    diags = Diagnostics()
+    try:
+        with open(scenario_path, encoding="utf-8") as fh:
+            text = fh.read()
+    except (OSError, UnicodeDecodeError) as exc:
+        return Outcome(design_path, scenario_path, False, 0.0, message=f"cannot read the scenario: {exc}")
+    sc = text_to_scenario(SourceFile(scenario_path, text), checked.model, diags)
+    if sc is None:
+        return Outcome(design_path, scenario_path, False, 0.0, message="the scenario has errors", diags=diags)
+    result = run_scenario(checked.model, sc)
+    seconds = time.perf_counter() - start
+    return Outcome(design_path, scenario_path, result.passed, seconds, sc.cycles, "" if result.passed else failure_text(result), result=result)
+
+
+def to_junit(report: Report) -> str:
+    """JUnit XML: one testsuite per design, one testcase per scenario."""
+    suites: dict[str, list[Outcome]] = {}
+    for o in report.outcomes:
+        suites.setdefault(o.design, []).append(o)
+    out = ['<?xml version="1.0" encoding="UTF-8"?>']
+    out.append(f'<testsuites name="rcsc" tests="{len(report.outcomes)}" failures="{report.failed}">')
+    for design, items in suites.items():
+        fails = sum(not o.passed for o in items)
+        total = sum(o.seconds for o in items)
+        out.append(f'  <testsuite name={quoteattr(design)} tests="{len(items)}" failures="{fails}" time="{total:.3f}">')
+        for o in items:
+            name = os.path.basename(o.scenario)
+            out.append(f'    <testcase classname={quoteattr(design)} name={quoteattr(name)} file={quoteattr(o.scenario)} time="{o.seconds:.3f}">')
+            if not o.passed:
+                first = o.message.splitlines()[0] if o.message else "failed"
+                out.append(f"      <failure message={quoteattr(first)}>{escape(o.message)}</failure>")
+            out.append("    </testcase>")
+        out.append("  </testsuite>")
+    out.append("</testsuites>")
+    return "\n".join(out) + "\n"

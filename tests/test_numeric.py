@@ -1,0 +1,126 @@
+"""The numeric rules (DESIGN.md section 3), each at its edge, in the simulator and the folder.
+
+Integers wrap (two's complement), integer division truncates toward zero,
+division or remainder by zero gives 0, i32 MIN / -1 wraps to MIN, f64 is
+IEEE-754 (x / 0.0 is inf or NaN), float->int saturates and NaN gives 0.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+
+from rcsc import numeric
+from rcsc.driver import check_path
+from rcsc.simulate import Simulator
+from rcsc.types import I32, I64, U32
+
+I32_MIN, I32_MAX = -(2**31), 2**31 - 1
+
+
+@pytest.fixture(scope="module")
+def design():
+    result = check_path(str(Path(__file__).parent / "sim" / "numeric.rcs"))
+    assert not result.diags.items, [d.message for d in result.diags]
+    return result.model
+
+
+def run(design, **inputs):
+    sim = Simulator(design)
+    for name, value in inputs.items():
+        sim.set_input(name, value)
+    sim.begin_cycle()
+    sim.run_cycle()
+    return sim.statuses["N"].fields
+
+
+def test_i32_overflow_wraps(design) -> None:
+    f = run(design, a=I32_MAX, b=1, y=1.0)
+    assert f["sum"] == I32_MIN
+    f = run(design, a=I32_MIN, b=-1, y=1.0)
+    assert f["sum"] == I32_MAX
+    assert f["neg"] == I32_MIN  # -MIN wraps to MIN
+
+
+def test_u32_underflow_wraps(design) -> None:
+    assert run(design, u=0, b=1)["diff_u"] == 2**32 - 1
+
+
+def test_i64_overflow_wraps(design) -> None:
+    assert run(design, big=2**62, b=1)["prod64"] == -(2**63)
+
+
+def test_division_by_zero_gives_zero(design) -> None:
+    f = run(design, a=7, b=0)
+    assert f["quot"] == 0 and f["rem"] == 0
+
+
+def test_division_truncates_toward_zero(design) -> None:
+    f = run(design, a=-7, b=2)
+    assert f["quot"] == -3 and f["rem"] == -1
+    f = run(design, a=7, b=-2)
+    assert f["quot"] == -3 and f["rem"] == 1
+
+
+def test_i32_min_divided_by_minus_one_wraps(design) -> None:
+    f = run(design, a=I32_MIN, b=-1)
+    assert f["quot"] == I32_MIN and f["rem"] == 0
+
+
+def test_float_division_by_zero_is_ieee(design) -> None:
+    assert run(design, x=1.0, y=0.0, b=1)["fquot"] == math.inf
+    assert run(design, x=-1.0, y=0.0, b=1)["fquot"] == -math.inf
+    assert math.isnan(run(design, x=0.0, y=0.0, b=1)["fquot"])
+
+
+def test_nan_to_int_is_zero(design) -> None:
+    f = run(design, x=math.nan, y=1.0, b=1)
+    assert (f["to_i32"], f["to_u32"], f["to_i64"]) == (0, 0, 0)
+
+
+def test_float_to_int_saturates(design) -> None:
+    f = run(design, x=1e30, y=1.0, b=1)
+    assert (f["to_i32"], f["to_u32"], f["to_i64"]) == (I32_MAX, 2**32 - 1, 2**63 - 1)
+    f = run(design, x=-1e30, y=1.0, b=1)
+    assert (f["to_i32"], f["to_u32"], f["to_i64"]) == (I32_MIN, 0, -(2**63))
+    f = run(design, x=math.inf, y=1.0, b=1)
+    assert f["to_i32"] == I32_MAX
+    f = run(design, x=-2.9, y=1.0, b=1)
+    assert (f["to_i32"], f["to_u32"]) == (-2, 0)  # toward zero; negative saturates to u32 0
+
+
+def test_int_narrowing_wraps(design) -> None:
+    assert run(design, big=2**32 + 5, b=1)["narrowed"] == 5
+    assert run(design, big=2**31, b=1)["narrowed"] == I32_MIN
+
+
+@pytest.mark.parametrize(
+    "a,b,t,q,r",
+    [
+        (7, 0, I32, 0, 0),
+        (I32_MIN, -1, I32, I32_MIN, 0),
+        (-(2**63), -1, I64, -(2**63), 0),
+        (-7, 2, I32, -3, -1),
+        (2**32 - 1, 2, U32, 2**31 - 1, 1),
+    ],
+)
+def test_numeric_module_edges(a, b, t, q, r) -> None:
+    assert numeric.int_div(a, b, t) == q
+    assert numeric.int_rem(a, b, t) == r
+
+
+def test_constant_folding_uses_the_same_rules(tmp_path: Path) -> None:
+    src = tmp_path / "fold.rcs"
+    src.write_text(
+        "design fold\n"
+        "const WRAP: i32 = 2147483647 + 1\n"
+        "const DIV0: i32 = 5 / 0\n"
+        "const MINDIV: i32 = -2147483648 / -1\n"
+        "const NAN_INT: i32 = i32(0.0 / 0.0)\n"
+        "const SAT: u32 = u32(-5.0)\n"
+    )
+    result = check_path(str(src))
+    consts = {k: v.value for k, v in result.model.consts.items()}
+    assert consts == {"WRAP": I32_MIN, "DIV0": 0, "MINDIV": I32_MIN, "NAN_INT": 0, "SAT": 0}
