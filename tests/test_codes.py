@@ -1,0 +1,28 @@
+"""The diagnostic code table (rcsc.codes) is complete and consistent."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from rcsc.codes import CODES, explain
+from rcsc.diagnostics import Severity
+
+
+@pytest.mark.parametrize("code", sorted(CODES))
+def test_code_entry(code: str) -> None:
+    entry = CODES[code]
+    assert entry.code == code
+    assert re.fullmatch(r"[EW]\d{4}", code)
+    expected = Severity.ERROR if code.startswith("E") else Severity.WARNING
+    assert entry.severity is expected
+    assert entry.title.strip() and entry.title == entry.title.strip()
+    # An explanation says what is wrong and why: a couple of sentences at least.
+    assert len(entry.explanation.strip()) >= 80, entry.explanation
+
+
+def test_explain_is_case_insensitive_and_rejects_unknown_codes() -> None:
+    assert explain("e0100") == explain("E0100")
+    assert explain("E0100").startswith("E0100 (error): unknown name\n\n")
+    assert explain("E9999") is None
