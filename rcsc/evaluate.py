@@ -154,6 +154,8 @@ def _call(e: m.Call, args: list, env: Env):
             if isinstance(e.type, IntType):
                 return numeric.wrap(abs(v), e.type)
             return math.fabs(v)
+        if e.func == "seconds":
+            return args[0] / 1e9
         if e.func == "min":
             a, b = args
             if e.type == F64 and (math.isnan(a) or math.isnan(b)):

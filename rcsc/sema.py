@@ -21,7 +21,7 @@ from rcsc.source import Span
 from rcsc.typecheck import BUILTIN_FUNCS, CONVERSIONS, Checker, Globals, Scope
 from rcsc.types import BUILTIN_TYPES, ERROR, I32, EnumType, ErrorType, RecordType, Type
 
-_RESERVED = set(BUILTIN_TYPES) | set(BUILTIN_FUNCS) | CONVERSIONS | {"cmd", "in_state"}
+_RESERVED = set(BUILTIN_TYPES) | set(BUILTIN_FUNCS) | CONVERSIONS | {"cmd", "in_state", "seconds"}
 
 
 class _Sema:
@@ -31,6 +31,8 @@ class _Sema:
         self.g = Globals()
         self.g.types.update(BUILTIN_TYPES)
         self.g.resolve_const = self._resolve_const_lazily
+        self.g.resolve_fn = self._fn_body
+        self.fn_busy: set[str] = set()
         self.decls: dict[str, ast.Node] = {}
         self.const_ast: dict[str, ast.Const] = {}
         self.const_busy: set[str] = set()
@@ -53,8 +55,12 @@ class _Sema:
                     continue
                 prev = self.decls.get(name.name)
                 if prev is not None:
-                    diag = self.d.add("E0101", name.span, f"`{name.name}` is defined more than once", "defined again here")
-                    diag.with_label(prev.name.span, "first defined here")  # type: ignore[attr-defined]
+                    again, first = name, prev.name  # type: ignore[attr-defined]
+                    if again.span.file.path.startswith("<stdlib>/") and not first.span.file.path.startswith("<stdlib>/"):
+                        # Blame the design's own declaration, not the standard library's.
+                        again, first = first, again
+                    diag = self.d.add("E0101", again.span, f"`{name.name}` is defined more than once", "defined again here")
+                    diag.with_label(first.span, "first defined here")
                     continue
                 self.decls[name.name] = item
 
@@ -118,7 +124,7 @@ class _Sema:
         if lo is None or hi is None:
             return None
         if lo.value > hi.value:  # type: ignore[operator]
-            self.d.add("E0206", ref.span, "empty range: the lower bound is above the upper bound", "empty range")
+            self.d.add("E0206", ref.lo.span.to(ref.hi.span), "empty range: the lower bound is above the upper bound", "empty range")
             return None
         return m.Range(lo.value, hi.value)  # type: ignore[arg-type]
 
@@ -138,7 +144,7 @@ class _Sema:
             return False
         if name in self.const_busy:
             self.d.add("E0204", item.name.span, f"constant `{name}` depends on itself", "circular constant")
-            return False
+            return True  # a known constant without a value yet: its uses become ERROR, not E0100
         self.const_busy.add(name)
         self._const(item)
         self.const_busy.discard(name)
@@ -155,12 +161,12 @@ class _Sema:
         self.g.consts[item.name.name] = m.ConstDef(item.name.name, t, value.value, item.span)
 
     def globals_(self) -> None:
+        # Function signatures first: constants may call pure functions.  A
+        # parameter range that needs a constant resolves it lazily.
+        const_checker = Checker(Scope(self.g, const_only=True), self.d)
         for name, item in self.decls.items():
             if isinstance(item, ast.Const):
                 self.const_ast[name] = item
-        for name in self.const_ast:
-            self._resolve_const_lazily(name)
-        const_checker = Checker(Scope(self.g, const_only=True), self.d)
         for name, item in self.decls.items():
             if isinstance(item, (ast.Function, ast.Extern)):
                 params = self.params(item.params, const_checker)
@@ -169,8 +175,14 @@ class _Sema:
                     fn.budget_ns = item.budget.nanos
                 fn.module = item.span.file.path
                 self.g.functions[name] = fn
-            elif isinstance(item, ast.VerbSet):
+        for name in self.const_ast:
+            self._resolve_const_lazily(name)
+        for name, item in self.decls.items():
+            if isinstance(item, ast.VerbSet):
                 self.verbsets[name] = item
+                for i, v in enumerate(item.verbs):
+                    if any(v.name.name == w.name.name for w in item.verbs[:i]):
+                        self.d.add("E0101", v.name.span, f"verb `{v.name.name}` is declared more than once in verb set `{name}`", "repeated verb")
             elif isinstance(item, ast.GmVar):
                 t = self.type_ref(item.type)
                 var = m.Var(name, t, item.span, from_env=item.from_env)
@@ -191,6 +203,9 @@ class _Sema:
         for p in params:
             if any(q.name == p.name.name for q in out):
                 self.d.add("E0101", p.name.span, f"parameter `{p.name.name}` is defined more than once", "repeated parameter")
+                # Keep the slot (typed ERROR) so that calls with the written
+                # number of arguments do not also get E0201.
+                out.append(m.Var(p.name.name, ERROR, p.span))
                 continue
             t = self.type_ref(p.type)
             out.append(m.Var(p.name.name, t, p.span, range=self.range_of(p.type, t, checker)))
@@ -220,13 +235,20 @@ class _Sema:
         checker = Checker(Scope(self.g, const_only=True), self.d)
         verbs = list(item.verbs)
         uses: list[Span | None] = [None] * len(verbs)
+        used_sets: set[str] = set()
         for ref in item.verb_sets:
             vs = self.verbsets.get(ref.name)
             if vs is None:
                 self.d.add("E0106", ref.span, f"no verb set named `{ref.name}`", "unknown verb set")
                 continue
-            verbs.extend(vs.verbs)
-            uses.extend([ref.span] * len(vs.verbs))
+            if ref.name in used_sets:  # one finding for the line, not one per verb
+                self.d.add("E0101", ref.span, f"verb set `{ref.name}` is used more than once in `{name}`", "repeated `verbs`")
+                continue
+            used_sets.add(ref.name)
+            for v in vs.verbs:
+                if not any(v.name.name == w.name.name for w in vs.verbs[: vs.verbs.index(v)]):  # repeats: reported once, at the verb set
+                    verbs.append(v)
+                    uses.append(ref.span)
         for v, use in zip(verbs, uses):
             if v.name.name in c.verbs:
                 self.d.add("E0101", use or v.name.span, f"verb `{v.name.name}` is declared more than once in `{name}`", "repeated verb")
@@ -247,7 +269,10 @@ class _Sema:
             (d, c.locals, "local") for d in item.locals
         ]:
             n = decl.name.name
-            if n in c.status_fields or n in c.locals or n in ("cmd", "in_state"):
+            if n in ("cmd", "in_state"):
+                self.d.add("E0101", decl.name.span, f"`{n}` is a built-in name and cannot be redefined", "built-in name")
+                continue
+            if n in c.status_fields or n in c.locals:
                 self.d.add("E0101", decl.name.span, f"`{n}` is defined more than once in `{name}`", f"repeated {what}")
                 continue
             t = self.type_ref(decl.type)
@@ -282,12 +307,21 @@ class _Sema:
 
     # ---- pass 5: bodies ---------------------------------------------------------
 
+    def _fn_body(self, name: str) -> None:
+        """Type-check a function's body (once), on demand or in declaration order."""
+        fn = self.g.functions.get(name)
+        item = self.decls.get(name)
+        if fn is None or fn.body is not None or not isinstance(item, ast.Function) or name in self.fn_busy:
+            return  # a recursive call leaves the body unchecked until the first call returns
+        self.fn_busy.add(name)
+        scope = Scope(self.g, fn_params={p.name: p for p in fn.params}, pure=True)
+        fn.body = Checker(scope, self.d).expect(item.body, fn.ret, f"the result of `{name}`")
+        self.fn_busy.discard(name)
+
     def bodies(self) -> None:
         for name, item in self.decls.items():
             if isinstance(item, ast.Function):
-                fn = self.g.functions[name]
-                scope = Scope(self.g, fn_params={p.name: p for p in fn.params}, pure=True)
-                fn.body = Checker(scope, self.d).expect(item.body, fn.ret, f"the result of `{name}`")
+                self._fn_body(name)
         self._recursion()
         for name, item in self.decls.items():
             if isinstance(item, ast.Controller):
@@ -391,7 +425,15 @@ class _Sema:
                 self.d.add("E0209", extra.span, "`overhead` is given more than once", "repeated `overhead`")
             if not item.schedule:
                 self.d.add("E0209", item.name.span, f"cpu `{name}` has no `schedule`", "no schedule")
-            schedule = self._names(item.schedule, "controller")
+            schedule: list[m.NameUse] = []
+            for nl in item.schedule:  # a repeat in one CPU is E0604, as across CPUs
+                for ident in nl.names:
+                    first = next((u for u in schedule if u.name == ident.name), None)
+                    if first is not None:
+                        diag = self.d.add("E0604", ident.span, f"`{ident.name}` is scheduled more than once", "scheduled again")
+                        diag.with_label(first.span, f"first scheduled on `{name}`")
+                        continue
+                    schedule.append(m.NameUse(ident.name, ident.span))
             for use in schedule:
                 if use.name not in self.g.controllers:
                     self.d.add("E0104", use.span, f"no controller named `{use.name}`", "unknown controller")

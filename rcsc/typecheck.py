@@ -47,8 +47,11 @@ class Globals:
     gm: dict[str, m.Var] = field(default_factory=dict)
     functions: dict[str, m.Function] = field(default_factory=dict)
     controllers: dict[str, m.Controller] = field(default_factory=dict)
-    # Lazily resolves a constant that is used before its declaration was processed.
+    # Lazily resolve a constant, or type-check a function's body, that is used
+    # before its own declaration was processed (constants may call functions
+    # and functions may read constants, in any order of declaration).
     resolve_const: object = None
+    resolve_fn: object = None
     # Names already reported as undeclared where they were declared to be used
     # (an unknown subordinate, an unknown GM variable in `reads`): later uses
     # stay quiet so that one mistake gives one finding.
@@ -71,7 +74,10 @@ class FoldEnv(Env):
         self.g = g
 
     def function(self, name: str) -> m.Function:
-        return self.g.functions[name]
+        fn = self.g.functions[name]
+        if fn.body is None:  # not checked yet (a call in a constant before pass 5) or being checked
+            raise NotConstant(None)  # type: ignore[arg-type]
+        return fn
 
 
 def describe(t: Type) -> str:
@@ -166,6 +172,9 @@ class Checker:
         return m.Const(node.span, BOOL, node.value)
 
     def e_DurationLit(self, node: ast.DurationLit, expected: Type | None) -> m.Expr:
+        if not (I64.min <= node.nanos <= I64.max):  # held as i64 nanoseconds
+            self.d.add("E0207", node.span, "duration literal out of range for `duration`", f"`duration` holds at most {I64.max} ns")
+            return m.Const(node.span, ERROR, 0)
         return m.Const(node.span, DURATION, node.nanos)
 
     def e_Name(self, node: ast.Name, expected: Type | None) -> m.Expr:
@@ -388,6 +397,13 @@ class Checker:
             if isinstance(args[0].type, ErrorType):
                 return m.Const(node.span, ERROR, 0)
             return self.fold(m.Call(node.span, target, "convert", name, args))
+        if name == "seconds" and name not in self.g.functions and not self._is_variable(name):
+            # Durations are whole nanoseconds; `seconds(d)` is the f64 number
+            # of seconds, for integrating and rate limits (d / 1e9, IEEE).
+            args = self.match_args([("duration", DURATION)], node.args, node, "`seconds`")
+            if args is None:
+                return m.Const(node.span, ERROR, 0)
+            return self.fold(m.Call(node.span, F64, "builtin", name, args))
         if name in BUILTIN_FUNCS and name not in self.g.functions:
             count = BUILTIN_FUNCS[name]
             params = [("x", None)] if count == 1 else [("a", None), ("b", None)]
@@ -397,6 +413,15 @@ class Checker:
             types = {a.type for a in args}
             if any(isinstance(t, ErrorType) for t in types):
                 return m.Const(node.span, ERROR, 0)
+            literals = {a.value.span: a.value for a in node.args if self._untyped(a.value)}
+            typed = {a.type for a in args if a.span not in literals}
+            if len(types) != 1 and len(typed) == 1:
+                # `max(x, 1)` with x: f64: the integer literal takes the other argument's type.
+                t = next(iter(typed))
+                args = [self.expr(literals[a.span], t) if a.span in literals else a for a in args]
+                types = {a.type for a in args}
+                if any(isinstance(t, ErrorType) for t in types):
+                    return m.Const(node.span, ERROR, 0)
             if len(types) != 1:
                 self.d.add("E0200", node.span, f"`{name}` needs arguments of one type", "different types")
                 return m.Const(node.span, ERROR, 0)
@@ -426,6 +451,8 @@ class Checker:
         args = self.match_args([(p.name, p.type) for p in fn.params], node.args, node, f"function `{name}`")
         if args is None:
             return m.Const(node.span, ERROR, 0)
+        if fn.body is None and not fn.extern and callable(self.g.resolve_fn):
+            self.g.resolve_fn(name)
         call = m.Call(node.span, fn.ret, "extern" if fn.extern else "fn", name, args)
         return call if fn.extern or fn.body is None else self.fold(call)
 
