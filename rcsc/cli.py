@@ -278,6 +278,31 @@ def _run_test(args: argparse.Namespace) -> int:
 
 
 # ---------------------------------------------------------------------------
+# rcsc budget
+# ---------------------------------------------------------------------------
+
+def _add_budget_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("path", metavar="DESIGN", help="the design's root file")
+
+
+def _run_budget(args: argparse.Namespace) -> int:
+    from rcsc.checks.timing import format_budget_table
+
+    driver = _load_driver()
+    try:
+        result = driver.check_path(args.path)
+    except driver.InputError as exc:
+        raise UsageError(str(exc)) from exc
+    if result.model is None:
+        _report_to_stderr(result.diags)
+        return EXIT_FINDINGS
+    _write(sys.stdout, format_budget_table(result.model))
+    if result.diags.items:
+        _report_to_stderr(result.diags)
+    return _exit_code(result.diags, False)
+
+
+# ---------------------------------------------------------------------------
 # the command table and the parser
 # ---------------------------------------------------------------------------
 
@@ -293,6 +318,7 @@ COMMANDS: dict[str, Command] = {
     "explain": Command("explain a diagnostic code", _add_explain_arguments, _run_explain),
     "sim": Command("run a scenario in the reference simulator and write its trace", _add_sim_arguments, _run_sim),
     "test": Command("run scenarios with expectations, like a test runner", _add_test_arguments, _run_test),
+    "budget": Command("print each CPU's timing table (budgets against the heartbeat)", _add_budget_arguments, _run_budget),
 }
 
 
