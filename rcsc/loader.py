@@ -82,7 +82,7 @@ def path_to_files(path: str, diags: Diagnostics) -> list[LoadedFile]:
             if isinstance(item, ast.Import):
                 if item.is_file:
                     if display_dir is None:
-                        diags.add("E0004", item.span, "a standard-library module cannot import a local file", "local import in the standard library")
+                        diags.add("E0004", _target_span(item), "a standard-library module cannot import a local file", "local import in the standard library")
                         continue
                     _import_file(item, real, display_dir)
                 else:
@@ -91,13 +91,13 @@ def path_to_files(path: str, diags: Diagnostics) -> list[LoadedFile]:
     def _import_file(item: ast.Import, importer_real: str, display_dir: str) -> None:
         target = item.target
         if os.path.isabs(target) or target.startswith("~"):
-            diags.add("E0004", item.span, "import of an absolute path", "absolute path").with_help(
+            diags.add("E0004", _target_span(item), "import of an absolute path", "absolute path").with_help(
                 "import files by a path relative to the importing file, inside the design folder"
             )
             return
         real = os.path.realpath(os.path.join(os.path.dirname(importer_real), target))
         if os.path.commonpath([real, root_dir]) != root_dir:
-            diags.add("E0004", item.span, f"import of `{target}` leaves the design folder", "outside the design folder").with_note(
+            diags.add("E0004", _target_span(item), f"import of `{target}` leaves the design folder", "outside the design folder").with_note(
                 f"the design folder is `{os.path.dirname(path) or '.'}`"
             )
             return
@@ -106,11 +106,11 @@ def path_to_files(path: str, diags: Diagnostics) -> list[LoadedFile]:
         try:
             text = _read(real)
         except InputError as exc:
-            diags.add("E0003", item.span, f"cannot read `{target}`: {exc}", "imported here")
+            diags.add("E0003", _target_span(item), f"cannot read `{target}`: {exc}", "imported here")
             return
         except OSError as exc:
             reason = (exc.strerror or "no such file").lower()
-            diags.add("E0003", item.span, f"cannot read `{target}`: {reason}", "imported here")
+            diags.add("E0003", _target_span(item), f"cannot read `{target}`: {reason}", "imported here")
             return
         display = os.path.normpath(os.path.join(display_dir, target))
         visit(SourceFile(display, text), real, False, os.path.dirname(display))
@@ -118,7 +118,7 @@ def path_to_files(path: str, diags: Diagnostics) -> list[LoadedFile]:
     def _import_std(item: ast.Import) -> None:
         res = stdlib_path(item.target)
         if res is None:
-            diags.add("E0005", item.span, f"no standard-library module `{item.target}`", "unknown module").with_note(
+            diags.add("E0005", _target_span(item), f"no standard-library module `{item.target}`", "unknown module").with_note(
                 "the standard library has: " + ", ".join(stdlib_modules())
             )
             return
@@ -155,6 +155,33 @@ def _check_header(tree: ast.File, source: SourceFile, is_root: bool, diags: Diag
         diags.add("E0006", tree.name.span, "an imported file must be a `module`, not a `design`", "second design").with_help(
             "a design has exactly one `design` file; begin imported files with `module NAME`"
         )
+
+
+def _target_span(item: ast.Import) -> Span:
+    """The span of just the imported path or module name (not the `import` keyword)."""
+    text, start = item.span.text, item.span.start
+    if item.is_file:
+        # STRING is the last token and cannot contain a quote.
+        i = text.rfind('"', 0, max(0, len(text) - 1))
+        return Span(item.span.file, start + i, item.span.end) if i >= 0 else item.span
+    i = _skip_trivia(text, len("import")) if text.startswith("import") else 0
+    return Span(item.span.file, start + i, item.span.end)
+
+
+def _skip_trivia(text: str, i: int) -> int:
+    """The index of the first character at or after `i` that is not blank or comment."""
+    while i < len(text):
+        if text[i].isspace():
+            i += 1
+        elif text.startswith("//", i):
+            j = text.find("\n", i)
+            i = len(text) if j < 0 else j
+        elif text.startswith("/*", i):
+            j = text.find("*/", i + 2)
+            i = len(text) if j < 0 else j + 2
+        else:
+            break
+    return i
 
 
 def _first_token_span(source: SourceFile) -> Span:

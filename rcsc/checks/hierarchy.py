@@ -50,9 +50,11 @@ def check(design: Design, diags: Diagnostics) -> None:
             )
 
     # Cycles (self-loops were reported above).
+    cycle_edges: set[tuple[str, str]] = set()
     for cycle in sorted(nx.simple_cycles(g), key=lambda cy: sorted(cy)):
         if len(cycle) == 1:
             continue
+        cycle_edges.update(zip(cycle, cycle[1:] + cycle[:1]))
         start = min(cycle)
         k = cycle.index(start)
         order = cycle[k:] + cycle[:k]
@@ -62,10 +64,13 @@ def check(design: Design, diags: Diagnostics) -> None:
             "cycle: " + " -> ".join(order + [start])
         )
 
-    # Levels descend.
+    # Levels descend.  A cycle cannot descend (already E0301), and a missing
+    # `level` (E0209, taken as 0) says nothing: no follow-on findings for those.
     for c in ctrls.values():
         for use in c.subordinates:
             sub = ctrls[use.name]
+            if (c.name, use.name) in cycle_edges or c.level_span is None or sub.level_span is None:
+                continue
             if use.name != c.name and sub.level >= c.level:
                 diag = diags.add(
                     "E0302",

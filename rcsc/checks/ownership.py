@@ -7,8 +7,23 @@ is read by someone; nothing is read that nobody writes.
 
 from __future__ import annotations
 
+import re
+
 from rcsc.diagnostics import Diagnostics
-from rcsc.model import Design
+from rcsc.model import Design, Var
+from rcsc.source import Span
+
+# `gm`, then blanks and comments, then the name.
+_GM_HEAD = re.compile(r"gm(?:\s|//[^\n]*|/\*.*?\*/)*", re.S)
+
+
+def _name_span(var: Var) -> Span:
+    """The span of the variable's name in its `gm NAME: ...` declaration."""
+    head = _GM_HEAD.match(var.span.text)
+    if head is None or not var.span.text.startswith(var.name, head.end()):
+        return var.span
+    start = var.span.start + head.end()
+    return Span(var.span.file, start, start + len(var.name))
 
 
 def check(design: Design, diags: Diagnostics) -> None:
@@ -41,9 +56,9 @@ def check(design: Design, diags: Diagnostics) -> None:
                 diag.with_label(var.span, "declared here")
                 diag.with_help(f"add `writes {name}` to the controller that produces it, or declare it `from env`")
             else:
-                diags.add("W0403", var.span, f"Global Memory variable `{name}` is never read or written", "unused")
+                diags.add("W0403", _name_span(var), f"Global Memory variable `{name}` is never read or written", "unused")
         elif not readers[name]:
-            diags.add("W0403", var.span, f"Global Memory variable `{name}` is never read", "never read").with_help(
+            diags.add("W0403", _name_span(var), f"Global Memory variable `{name}` is never read", "never read").with_help(
                 f"add `reads {name}` to the controller that uses it, or remove it"
             )
 
