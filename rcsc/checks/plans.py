@@ -72,6 +72,22 @@ def check(design: Design, diags: Diagnostics) -> None:
             _check_plan(c, plan, diags)
 
 
+def _region_ends(g: nx.MultiDiGraph, region: list[str], sources: bool) -> list[str]:
+    """The first state (in `region` order) of each source (or sink) component of `region`'s subgraph."""
+    if not region:
+        return []
+    sub = nx.DiGraph(g.subgraph(region))
+    cond = nx.condensation(sub)
+    order = {s: i for i, s in enumerate(region)}
+    ends = []
+    for comp in cond.nodes:
+        degree = cond.in_degree(comp) if sources else cond.out_degree(comp)
+        if degree == 0:
+            members = cond.nodes[comp]["members"]
+            ends.append(min(members, key=order.__getitem__))
+    return sorted(ends, key=order.__getitem__)
+
+
 def _first_mention(plan: m.Plan, state: str) -> m.StateRef | None:
     for r in plan.rules:
         if r.state.kind == "named" and r.state.name == state:
@@ -97,23 +113,30 @@ def _check_plan(c: m.Controller, plan: m.Plan, diags: Diagnostics) -> None:
     states = plan_states(plan)
     g = state_graph(plan)
     reachable = nx.descendants(g, "new") | {"new"}
-    for s in plan.states:
-        if s in ("done", "error"):
-            continue  # `done`/`error` as a current state: E0510 in sema
-        if s not in reachable:
-            ref = _first_mention(plan, s)
-            if ref is not None:
-                diags.add("E0502", ref.span, f"state `{s}` of plan `{plan.verb}` is unreachable from `new`", "unreachable state").with_note(
-                    "no rule leads here from the entry state"
-                )
+    # Report the causes, not their consequences: of the unreachable states,
+    # those that no other unreachable state leads to (sources of the
+    # unreachable region); of the states that cannot finish, those whose way
+    # out leads only among themselves (sinks of the trapped region).
+    unreachable = [s for s in plan.states if s not in reachable and s not in ("done", "error")]
+    for s in _region_ends(g, unreachable, sources=True):
+        ref = _first_mention(plan, s)
+        if ref is not None:
+            diag = diags.add("E0502", ref.span, f"state `{s}` of plan `{plan.verb}` is unreachable from `new`", "unreachable state")
+            diag.with_note("no rule leads here from the entry state")
+            after = sorted(nx.descendants(g, s) & set(unreachable))
+            if after:
+                diag.with_note("so are the states it leads to: " + ", ".join(f"`{x}`" for x in after))
     if not plan.continuous:
         ends = nx.ancestors(g, DONE) | nx.ancestors(g, ERROR)
-        for s in states:
-            if s in reachable and s not in ends:
-                ref = _first_mention(plan, s) if s != "new" else None
-                span = ref.span if ref is not None else plan.name_span
-                diag = diags.add("E0503", span, f"from state `{s}` plan `{plan.verb}` can never finish", "no way to `done` or `error`")
-                diag.with_help(f"add a rule that leads to `done` or `error(...)`, or declare `plan {plan.verb} continuous`")
+        trapped = [s for s in states if s in reachable and s not in ends]
+        for s in _region_ends(g, trapped, sources=False):
+            ref = _first_mention(plan, s) if s != "new" else None
+            span = ref.span if ref is not None else plan.name_span
+            diag = diags.add("E0503", span, f"from state `{s}` plan `{plan.verb}` can never finish", "no way to `done` or `error`")
+            before = sorted(x for x in trapped if x != s and s in nx.descendants(g, x))
+            if before:
+                diag.with_note("states that lead here cannot finish either: " + ", ".join(f"`{x}`" for x in before))
+            diag.with_help(f"add a rule that leads to `done` or `error(...)`, or declare `plan {plan.verb} continuous`")
 
     _check_shadowing(plan, states, diags)
     _check_otherwise(plan, diags)
