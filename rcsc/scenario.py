@@ -47,6 +47,7 @@ class Command:
     verb: str
     args: dict
     span: Span
+    cycle_span: Span | None = None
 
 
 @dataclass
@@ -55,6 +56,7 @@ class Input:
     var: str
     value: object
     span: Span
+    cycle_span: Span | None = None
 
 
 @dataclass
@@ -254,11 +256,13 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
             _, span, cycle, cspan, ctrl, verb, args = item
             cmd = _command(design, const_checker, diags, span, cycle, cspan, ctrl, verb, args)
             if cmd is not None:
+                cmd.cycle_span = cspan
                 sc.commands.append(cmd)
         elif kind == "input":
             _, span, cycle, cspan, var, value = item
             inp = _input(design, const_checker, diags, span, cycle, cspan, var, value)
             if inp is not None:
+                inp.cycle_span = cspan
                 sc.inputs.append(inp)
         elif kind == "expect":
             _, span, (when, lo, hi, wspan), cond = item
@@ -275,7 +279,7 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
         diags.add("E0702", cycles_span, "a scenario runs at least one cycle", "zero cycles")
         return None
     sc.cycles = cycles
-    for when_cycle, span in [(c.cycle, c.span) for c in sc.commands] + [(i.cycle, i.span) for i in sc.inputs] + [
+    for when_cycle, span in [(c.cycle, c.cycle_span or c.span) for c in sc.commands] + [(i.cycle, i.cycle_span or i.span) for i in sc.inputs] + [
         (e.hi, e.span) for e in sc.expects if e.kind in ("at", "within")
     ] + [(e.lo, e.span) for e in sc.expects if e.kind in ("at", "within")]:
         if not 1 <= when_cycle <= cycles:

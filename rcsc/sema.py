@@ -423,6 +423,10 @@ class _Sema:
                 self.d.add("E0209", extra.span, "`heartbeat` is given more than once", "repeated `heartbeat`")
             for extra in item.overhead[1:]:
                 self.d.add("E0209", extra.span, "`overhead` is given more than once", "repeated `overhead`")
+            for extra in item.schedule[1:]:
+                self.d.add("E0209", extra.span, "`schedule` is given more than once", "second schedule").with_help(
+                    "list every controller of the CPU in one `schedule`, in execution order"
+                )
             if not item.schedule:
                 self.d.add("E0209", item.name.span, f"cpu `{name}` has no `schedule`", "no schedule")
             schedule: list[m.NameUse] = []

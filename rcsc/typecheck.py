@@ -475,7 +475,8 @@ class Checker:
             else:
                 positional_done = True
                 if a.name.name not in names:
-                    diag = self.d.add("E0202", a.name.span, f"{what} has no parameter `{a.name.name}`", "unknown parameter")
+                    noun = "field" if what.startswith("record") else "parameter"
+                    diag = self.d.add("E0202", a.name.span, f"{what} has no {noun} `{a.name.name}`", f"unknown {noun}")
                     diag.with_note("parameters: " + ", ".join(names) if names else f"{what} takes no arguments")
                     ok = False
                     continue

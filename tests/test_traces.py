@@ -110,7 +110,7 @@ def test_scenario_errors_are_diagnostics(capsys, tmp_path: Path) -> None:
     err = capsys.readouterr().err
     assert code == 1
     assert "error[E0700]" in err and "bad.scn:2:7" in err  # chain of command
-    assert "error[E0702]" in err and "bad.scn:3:1" in err  # cycle 9 of 5
+    assert "error[E0702]" in err and "bad.scn:3:4" in err  # cycle 9 of 5
     assert "error[E0703]" in err and "bad.scn:4:26" in err  # no state S7
     assert "Traceback" not in err
 
