@@ -313,14 +313,28 @@ def _command(design, checker, diags, span, cycle, cspan, ctrl: ast.Ident, verb: 
         return None
     out = {}
     for p, e in zip(v.params, values):
-        e = checker.fold(e)
         if isinstance(e.type, ErrorType):
             return None
-        if not isinstance(e, m.Const):
+        value = _constant_value(checker, e)
+        if value is None:
             diags.add("E0204", e.span, "a command argument in a scenario must be a constant", "not constant")
             return None
-        out[p.name] = e.value
+        out[p.name] = value.value
     return Command(cycle, c.name, v.name, out, span)
+
+
+def _constant_value(checker: Checker, e: m.Expr) -> m.Const | None:
+    """The folded value of `e`; records are built by evaluating their constructor."""
+    from rcsc.evaluate import NotConstant, eval_expr
+    from rcsc.typecheck import FoldEnv
+
+    e = checker.fold(e)
+    if isinstance(e, m.Const):
+        return e
+    try:
+        return m.Const(e.span, e.type, eval_expr(e, FoldEnv(checker.g)))
+    except (NotConstant, TypeError, KeyError, ValueError, ArithmeticError, RecursionError):
+        return None
 
 
 def _input(design, checker, diags, span, cycle, cspan, var: ast.Ident, value: ast.Expr) -> Input | None:
