@@ -100,46 +100,81 @@ def _compare(op: str, a, b) -> bool:
 
 def eval_expr(e: m.Expr, env: Env = CONST_ENV, fn_args: dict | None = None):
     """The value of `e`.  Raises NotConstant when `env` cannot supply a read."""
-    if isinstance(e, m.Const):
-        return e.value
-    if isinstance(e, m.Ref):
-        if e.kind == "arg" and fn_args is not None:
-            return fn_args[e.name]
-        return env.ref(e)
-    if isinstance(e, m.InState):
-        return env.in_state(e)
-    if isinstance(e, m.SubView):
-        return env.sub_view(e)
-    if isinstance(e, m.Field):
-        obj = eval_expr(e.obj, env, fn_args)
-        return obj[e.name]
-    if isinstance(e, m.Unary):
-        v = eval_expr(e.operand, env, fn_args)
-        if e.op == "not":
-            return not v
-        if isinstance(e.type, IntType):
-            return numeric.wrap(-v, e.type)
-        if e.type == DURATION:
-            return numeric.wrap(-v, I64)
-        return -v
-    if isinstance(e, m.Binary):
-        if e.op == "and":
-            return bool(eval_expr(e.left, env, fn_args)) and bool(eval_expr(e.right, env, fn_args))
-        if e.op == "or":
-            return bool(eval_expr(e.left, env, fn_args)) or bool(eval_expr(e.right, env, fn_args))
-        a = eval_expr(e.left, env, fn_args)
-        b = eval_expr(e.right, env, fn_args)
-        if e.type == BOOL:
-            return _compare(e.op, a, b)
-        return _arith(e.op, a, b, e.type)
-    if isinstance(e, m.IfExpr):
-        if eval_expr(e.cond, env, fn_args):
-            return eval_expr(e.then, env, fn_args)
-        return eval_expr(e.else_, env, fn_args)
-    if isinstance(e, m.Call):
-        args = [eval_expr(a, env, fn_args) for a in e.args]
-        return _call(e, args, env)
+    # Dispatch on the node's exact type: this is the simulator's inner loop.
+    return _EVAL.get(type(e), _e_other)(e, env, fn_args)
+
+
+def _e_const(e, env, fn_args):
+    return e.value
+
+
+def _e_ref(e, env, fn_args):
+    if e.kind == "arg" and fn_args is not None:
+        return fn_args[e.name]
+    return env.ref(e)
+
+
+def _e_in_state(e, env, fn_args):
+    return env.in_state(e)
+
+
+def _e_sub_view(e, env, fn_args):
+    return env.sub_view(e)
+
+
+def _e_field(e, env, fn_args):
+    return eval_expr(e.obj, env, fn_args)[e.name]
+
+
+def _e_unary(e, env, fn_args):
+    v = eval_expr(e.operand, env, fn_args)
+    if e.op == "not":
+        return not v
+    if isinstance(e.type, IntType):
+        return numeric.wrap(-v, e.type)
+    if e.type == DURATION:
+        return numeric.wrap(-v, I64)
+    return -v
+
+
+def _e_binary(e, env, fn_args):
+    op = e.op
+    if op == "and":
+        return bool(eval_expr(e.left, env, fn_args)) and bool(eval_expr(e.right, env, fn_args))
+    if op == "or":
+        return bool(eval_expr(e.left, env, fn_args)) or bool(eval_expr(e.right, env, fn_args))
+    a = eval_expr(e.left, env, fn_args)
+    b = eval_expr(e.right, env, fn_args)
+    if e.type == BOOL:
+        return _compare(op, a, b)
+    return _arith(op, a, b, e.type)
+
+
+def _e_if(e, env, fn_args):
+    if eval_expr(e.cond, env, fn_args):
+        return eval_expr(e.then, env, fn_args)
+    return eval_expr(e.else_, env, fn_args)
+
+
+def _e_call(e, env, fn_args):
+    return _call(e, [eval_expr(a, env, fn_args) for a in e.args], env)
+
+
+def _e_other(e, env, fn_args):
     return env.other(e)
+
+
+_EVAL = {
+    m.Const: _e_const,
+    m.Ref: _e_ref,
+    m.InState: _e_in_state,
+    m.SubView: _e_sub_view,
+    m.Field: _e_field,
+    m.Unary: _e_unary,
+    m.Binary: _e_binary,
+    m.IfExpr: _e_if,
+    m.Call: _e_call,
+}
 
 
 def _call(e: m.Call, args: list, env: Env):
