@@ -303,6 +303,87 @@ def _run_budget(args: argparse.Namespace) -> int:
 
 
 # ---------------------------------------------------------------------------
+# rcsc graph
+# ---------------------------------------------------------------------------
+
+def _add_graph_arguments(p: argparse.ArgumentParser) -> None:
+    from rcsc.graph import FORMATS, VIEWS
+
+    p.add_argument("path", metavar="DESIGN", help="the design's root file")
+    p.add_argument("--view", choices=VIEWS, default=None, help="what to draw (default: plan with --plan, else hierarchy)")
+    p.add_argument("--controller", metavar="C", help="the controller of the plan view")
+    p.add_argument("--plan", metavar="VERB", help="the plan (verb) of the plan view")
+    p.add_argument("--compact", action="store_true", help="plan view: label edges with the rule label only (Figure 13 style)")
+    p.add_argument("--format", choices=FORMATS, default=None, help="output format (default: from the -o suffix, else dot); svg and png need Graphviz")
+    p.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
+
+
+def _run_graph(args: argparse.Namespace) -> int:
+    from rcsc import graph
+
+    driver = _load_driver()
+    try:
+        result = driver.check_path(args.path)
+    except driver.InputError as exc:
+        raise UsageError(str(exc)) from exc
+    if result.model is None:
+        _report_to_stderr(result.diags)
+        return EXIT_FINDINGS
+    fmt = graph.format_for(args.format, args.output)
+    if fmt == "png" and args.output is None and getattr(sys.stdout, "isatty", lambda: False)():
+        raise UsageError("PNG is binary: give `-o FILE.png` (or pipe stdout to a file)")
+    view = args.view or ("plan" if args.plan or args.controller else "hierarchy")
+    try:
+        g = graph.select_graph(result.model, view, args.controller, args.plan, result.diags.sorted(), args.compact)
+        data = graph.output_bytes(g, fmt)
+    except graph.GraphError as exc:
+        raise UsageError(str(exc)) from exc
+    if args.output is None:
+        sys.stdout.flush()
+        sys.stdout.buffer.write(data)
+    else:
+        try:
+            with open(args.output, "wb") as fh:
+                fh.write(data)
+        except OSError as exc:
+            raise UsageError(f"cannot write `{args.output}`: {exc.strerror or exc}") from exc
+    if result.diags.items:
+        _report_to_stderr(result.diags)
+    return _exit_code(result.diags, False)
+
+
+# ---------------------------------------------------------------------------
+# rcsc doc
+# ---------------------------------------------------------------------------
+
+def _add_doc_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("path", metavar="DESIGN", help="the design's root file")
+    p.add_argument("-o", "--output", metavar="DIR", required=True, help="the folder to write index.html to (created if missing)")
+
+
+def _run_doc(args: argparse.Namespace) -> int:
+    from rcsc import doc, graph
+
+    driver = _load_driver()
+    try:
+        result = driver.check_path(args.path)
+    except driver.InputError as exc:
+        raise UsageError(str(exc)) from exc
+    if result.model is None:
+        _report_to_stderr(result.diags)
+        return EXIT_FINDINGS
+    try:
+        doc.write_site(result.model, result.diags.items, args.output)
+    except OSError as exc:
+        raise UsageError(f"cannot write to `{args.output}`: {exc.strerror or exc}") from exc
+    if not graph.dot_available():
+        _write(sys.stderr, "note: Graphviz `dot` is not installed: the page has its tables but no pictures\n")
+    if result.diags.items:
+        _report_to_stderr(result.diags)
+    return _exit_code(result.diags, False)
+
+
+# ---------------------------------------------------------------------------
 # the command table and the parser
 # ---------------------------------------------------------------------------
 
@@ -319,6 +400,8 @@ COMMANDS: dict[str, Command] = {
     "sim": Command("run a scenario in the reference simulator and write its trace", _add_sim_arguments, _run_sim),
     "test": Command("run scenarios with expectations, like a test runner", _add_test_arguments, _run_test),
     "budget": Command("print each CPU's timing table (budgets against the heartbeat)", _add_budget_arguments, _run_budget),
+    "graph": Command("draw the hierarchy, the data flow or a plan (DOT, SVG, PNG, Mermaid)", _add_graph_arguments, _run_graph),
+    "doc": Command("write a one-page HTML description of a design", _add_doc_arguments, _run_doc),
 }
 
 

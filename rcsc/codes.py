@@ -61,6 +61,12 @@ The file given to rcsc must begin with `design NAME`; a file brought in with
 `import` must begin with `module NAME` (or have no header). One design is one
 file set with exactly one `design` header.
 """),
+    ("E0007", _E, "nested too deeply", """
+An expression or a block of `if` statements is nested more than 128 levels
+deep (for example a sum of hundreds of terms written on one line). rcsc refuses
+it rather than risk running out of stack in later passes. Compute parts of the
+expression in locals or move them into functions.
+"""),
     # ---- names --------------------------------------------------------------
     ("E0100", _E, "unknown name", """
 A name is used that is not declared where it is used. Inside a controller the
@@ -240,8 +246,13 @@ plan waits forever - the defect of rcslib's generated INIT/HALT plans. Add a
 rule such as `E9: SUB.error | * -> error(1);`.
 """),
     ("E0506", _E, "rule can never fire", """
-An earlier rule of the same state has a condition that is always true, so it
-always fires first (first match wins) and this rule is dead logic.
+Earlier rules of the same state always match first (first match wins), so this
+rule is dead logic: either an earlier rule is unconditional (`true`), or the
+guard analysis proved that whenever this rule's condition holds, one of the
+earlier rules it names holds too. An `otherwise` is dead when the other rules of
+its state together match every input. A `*` rule is dead only if it is hidden in
+every state; the witness shows an input where its condition holds and which rule
+fires instead.
 """),
     ("E0507", _E, "command to a controller that is not a subordinate", """
 A controller may only command its own subordinates (chain of command, paper
@@ -268,6 +279,50 @@ When a command arrives its plan starts in state `new`. With no rule for `new`
 A controller has two plans with the same name. Each verb has exactly one plan
 (its state table), so a second plan for the same verb is either a leftover copy
 or a misspelt verb name.
+"""),
+    # ---- guards (z3): determinism and coverage of state tables ------------------
+    ("E0513", _E, "condition is never true", """
+The guard analysis proved that no input makes this rule's condition true, given
+the types of the values it reads and their declared ranges (`i32 in 0..3`), and
+that a subordinate is never done and failed at once. The rule can never fire,
+wherever it stands in the table: correct the condition or remove the rule.
+"""),
+    ("W0514", _W, "condition is always true", """
+A condition that is not the literal `true` holds for every input (for example
+`n >= 0` on a `u32`, or a test the declared ranges always satisfy), and rules
+after it in its state are therefore never reached. If the rule is meant to
+catch everything, write `true`; otherwise the condition is not what was meant.
+"""),
+    ("W0515", _W, "rules of a state can both be true with different outcomes", """
+Two rules of one state can both be true for the same input (and no earlier rule
+is), and they lead to different next states or jobs: the order of the table
+silently decides which one fires. The witness is such an input. Make the
+conditions exclusive, or declare the plan `ordered` (`plan X ordered { ... }`)
+to state that the table is prioritized on purpose. Not reported when the earlier
+rule leads to `error(...)`: a fault or time-out rule written first is the
+paper's prioritized style.
+"""),
+    ("E0516", _E, "a new command can leave every rule of `new` false", """
+For the input shown as witness no rule of state `new` (nor any `*` rule) fires,
+and `new` has no `otherwise`: the new command is accepted (status EXEC) and
+nothing happens. Cover the missing case (e.g. `x > 0` and `x < 0` miss `x == 0`),
+or add an `otherwise` rule for `new`.
+"""),
+    ("W0517", _W, "state can wait forever", """
+Waiting in a state until a rule fires is normal. This state, however, can wait
+for ever: for the values shown as witness of the inputs that cannot change
+while the plan waits (the command's parameters, and locals, status fields and
+Global Memory that only this controller writes outside `pre` and `post`), no
+rule of the state can fire whatever the other inputs (subordinates' status,
+sensors, time in state) do. Add a rule for the case, an `otherwise`, or a
+time-out rule.
+"""),
+    ("W0518", _W, "guard analysis incomplete", """
+The SMT solver could not decide a question about this plan's conditions within
+its budget (a per-query time-out and a deterministic resource limit), or a
+condition could not be encoded. The analysis never counts that as a pass: the
+rest of the plan is not analysed and this finding says what was being asked.
+Simplify the condition, for example by computing a non-linear term in `pre`.
 """),
     # ---- timing -------------------------------------------------------------
     ("E0600", _E, "CPU budget exceeds its heartbeat", """

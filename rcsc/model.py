@@ -249,6 +249,9 @@ class Plan:
     name_span: Span
     continuous: bool
     rules: list[Rule]
+    # `plan X ordered`: the table is prioritized on purpose (first match wins
+    # by design), so the guard analysis does not report overlapping rules.
+    ordered: bool = False
 
     @property
     def states(self) -> list[str]:

@@ -13,7 +13,7 @@ from fractions import Fraction
 from functools import lru_cache
 from importlib import resources
 
-from lark import Lark, Token, Transformer, v_args
+from lark import Lark, Token, Transformer_NonRecursive, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken, VisitError
 
 from rcsc import ast
@@ -34,7 +34,7 @@ _TOKEN_WORDS = {
     "MUL_OP": "`*`, `/` or `%`",
     "ASSIGN_OP": "`=`",
     "CONTROLLER_KIND": "`controller` or `simulator`",
-    "PLAN_MOD": "`continuous`",
+    "PLAN_MOD": "`continuous` or `ordered`",
     "OTHERWISE": "`otherwise`",
     "NEW": "`new`",
     "RANGE_IN": "`in`",
@@ -67,11 +67,22 @@ def _describe_expected(parser: Lark, names: set[str]) -> list[str]:
     return sorted(words)
 
 
-class _ToAst(Transformer):
+# Expressions and `if` blocks nested deeper than this are refused (E0007)
+# rather than handed to the recursive passes after the parser, the way rustc
+# has a recursion limit.  Real control code stays far below it.
+MAX_NESTING = 128
+
+
+def _depth(x) -> int:
+    return getattr(x, "depth", 1) if x is not None else 0
+
+
+class _ToAst(Transformer_NonRecursive):
     """Lark tree -> rcsc.ast.  Every method receives the node's meta."""
 
     def __init__(self, source: SourceFile, diags: Diagnostics) -> None:
         super().__init__(visit_tokens=False)
+        self.too_deep = False
         self.src = source
         self.diags = diags
 
@@ -87,6 +98,17 @@ class _ToAst(Transformer):
 
     def ident(self, tok: Token) -> ast.Ident:
         return ast.Ident(self.tspan(tok), str(tok))
+
+    def nest(self, node, *children):
+        """Record `node`'s nesting depth; report the first node past MAX_NESTING."""
+        depth = 1 + max((_depth(c) for c in children), default=0)
+        node.depth = depth
+        if depth > MAX_NESTING and not self.too_deep:
+            self.too_deep = True
+            self.diags.add("E0007", node.span, f"nested more than {MAX_NESTING} levels deep", "too deep here").with_help(
+                "split it: compute parts in locals, or move them into functions"
+            )
+        return node
 
     def node_span(self, node) -> Span:
         return node.span if isinstance(node, ast.Node) else self.tspan(node)
@@ -318,18 +340,19 @@ class _ToAst(Transformer):
     @v_args(meta=True)
     def assign(self, meta, children):
         target, op, value = children
-        return ast.Assign(self.span(meta), target, str(op), value)
+        return self.nest(ast.Assign(self.span(meta), target, str(op), value), value)
 
     @v_args(meta=True)
     def command(self, meta, children):
         sub, verb, args = children
-        return ast.Command(self.span(meta), self.ident(sub), self.ident(verb), args or [])
+        return self.nest(ast.Command(self.span(meta), self.ident(sub), self.ident(verb), args or []), *[a.value for a in args or []])
 
     @v_args(meta=True)
     def call_stmt(self, meta, children):
         func, args = children
         span = self.span(meta)
-        return ast.CallStmt(span, ast.Call(span, self.ident(func), args or []))
+        call = self.nest(ast.Call(span, self.ident(func), args or []), *[a.value for a in args or []])
+        return self.nest(ast.CallStmt(span, call), call)
 
     @v_args(meta=True)
     def report(self, meta, children):
@@ -348,7 +371,8 @@ class _ToAst(Transformer):
         cond, body, *rest = children
         else_body = rest.pop() if rest else None
         branches = [(cond, body)] + [c for c in rest if c is not None]
-        return ast.If(self.span(meta), branches, else_body)
+        inner = [c for c, _ in branches] + [st for _, b in branches for st in b] + list(else_body or [])
+        return self.nest(ast.If(self.span(meta), branches, else_body), *inner)
 
     @v_args(meta=True)
     def args(self, meta, children):
@@ -423,23 +447,23 @@ class _ToAst(Transformer):
 
     @v_args(meta=True)
     def attr(self, meta, children):
-        return ast.Attr(self.span(meta), children[0], self.ident(children[1]))
+        return self.nest(ast.Attr(self.span(meta), children[0], self.ident(children[1])), children[0])
 
     @v_args(meta=True)
     def call(self, meta, children):
         func, args = children
-        return ast.Call(self.span(meta), self.ident(func), args or [])
+        return self.nest(ast.Call(self.span(meta), self.ident(func), args or []), *[a.value for a in args or []])
 
     @v_args(meta=True)
     def neg(self, meta, children):
-        return ast.Unary(self.span(meta), "-", children[0])
+        return self.nest(ast.Unary(self.span(meta), "-", children[0]), children[0])
 
     @v_args(meta=True)
     def not_(self, meta, children):
-        return ast.Unary(self.span(meta), "not", children[0])
+        return self.nest(ast.Unary(self.span(meta), "not", children[0]), children[0])
 
     def _bin(self, meta, left, op, right, op_span):
-        return ast.Binary(self.span(meta), op, left, right, op_span)
+        return self.nest(ast.Binary(self.span(meta), op, left, right, op_span), left, right)
 
     @v_args(meta=True)
     def binop(self, meta, children):
@@ -460,7 +484,7 @@ class _ToAst(Transformer):
 
     @v_args(meta=True)
     def if_expr(self, meta, children):
-        return ast.IfExpr(self.span(meta), *children)
+        return self.nest(ast.IfExpr(self.span(meta), *children), *children)
 
 
 def text_to_ast(source: SourceFile, diags: Diagnostics) -> ast.File | None:
@@ -471,10 +495,13 @@ def text_to_ast(source: SourceFile, diags: Diagnostics) -> ast.File | None:
     except UnexpectedInput as exc:
         _syntax_error(parser, source, exc, diags)
         return None
+    builder = _ToAst(source, diags)
     try:
-        return _ToAst(source, diags).transform(tree)
+        result = builder.transform(tree)
     except VisitError as exc:  # pragma: no cover - a bug in the transformer
         raise exc.orig_exc from exc
+    # Too deep to analyse safely: report it (E0007) like a syntax error.
+    return None if builder.too_deep else result
 
 
 def _syntax_error(parser: Lark, source: SourceFile, exc: UnexpectedInput, diags: Diagnostics) -> None:

@@ -235,7 +235,10 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
     except UnexpectedInput as exc:
         _syntax_error(parser, source, exc, diags)
         return None
-    items = _ScenarioAst(source, diags).transform(tree)
+    builder = _ScenarioAst(source, diags)
+    items = builder.transform(tree)
+    if builder.too_deep:
+        return None
     start = len(diags.errors)
     g = globals_of(design)
     const_checker = Checker(Scope(g, const_only=True), diags)

@@ -403,7 +403,8 @@ class _Sema:
                 nxt.code = int(code.value) if code is not None and isinstance(code.value, int) else 0
             jobs = checker.stmts(r.jobs, allow_commands=True)
             rules.append(m.Rule(i, r.label.name, r.span, r.label.span, state, guard, r.guard_span, nxt, jobs))
-        return m.Plan(verb.name, plan.span, plan.name.span, plan.continuous, rules)
+        ordered = any(mod.name == "ordered" for mod in plan.modifiers)
+        return m.Plan(verb.name, plan.span, plan.name.span, plan.continuous, rules, ordered)
 
     # ---- pass 6: CPUs -----------------------------------------------------------
 

@@ -144,20 +144,36 @@ def _check_plan(c: m.Controller, plan: m.Plan, diags: Diagnostics) -> None:
     _check_error_handling(c, plan, states, diags)
 
 
-def _check_shadowing(plan: m.Plan, states: list[str], diags: Diagnostics) -> None:
+def literal_dead_rules(plan: m.Plan, states: list[str] | None = None) -> dict[int, m.Rule]:
+    """Rules after a literally unconditional (`true`) rule in each of their states.
+
+    Maps the dead rule's index to the first `true` rule that hides it.  E0506
+    reports these here, without a solver; the guard analysis
+    (`rcsc.checks.guards`) finds the rest and skips these.
+    """
+    states = plan_states(plan) if states is None else states
     covered: dict[str, m.Rule] = {}  # state -> first unconditional rule covering it
+    dead: dict[int, m.Rule] = {}
     for r in plan.rules:
         sources = rule_sources(r, states)
         dead_by = [covered[s] for s in sources if s in covered]
         if sources and len(dead_by) == len(sources):
-            first = dead_by[0]
+            dead[r.index] = dead_by[0]
+        if is_always_true(r.guard):
+            for s in sources:
+                covered.setdefault(s, r)
+    return dead
+
+
+def _check_shadowing(plan: m.Plan, states: list[str], diags: Diagnostics) -> None:
+    dead = literal_dead_rules(plan, states)
+    for r in plan.rules:
+        if r.index in dead:
+            first = dead[r.index]
             what = "`otherwise`" if r.otherwise else f"rule `{r.label}`"
             diag = diags.add("E0506", r.label_span, f"{what} can never fire", "dead rule")
             diag.with_label(first.guard_span, f"`{first.label}` always matches first")
             diag.with_note("the first rule whose state and condition match fires; an unconditional rule hides the rules after it")
-        if is_always_true(r.guard):
-            for s in sources:
-                covered.setdefault(s, r)
 
 
 def _check_otherwise(plan: m.Plan, diags: Diagnostics) -> None:

@@ -1,0 +1,1238 @@
+"""Determinism and coverage of state tables, proven with z3 (DESIGN.md section 4).
+
+For every state of every plan this family asks the solver, over the inputs
+the controller reads when it decides (`rcsc.smt` says how each input and
+each type is encoded), which rules can never fire, which rules can be true
+together so that the order of the table decides, and for which inputs no
+rule fires.  Each finding carries a witness: values of the inputs that show
+it, in the text (`= note: witness: x = 1, TB = done`) and in
+`Diagnostic.data["witness"]` for JSON and SARIF.
+
+The rules of a state are the rules written for it and the `*` rules, in table
+order; the `otherwise` rule of the state fires when none of them does.
+
+Findings
+--------
+E0506 (error) dead rule
+    A rule (or an `otherwise`) that can never fire because earlier rules of
+    each of its states cover every input for which its condition holds.  The
+    literal case (a rule after a `true` rule) is found by
+    `rcsc.checks.plans` without a solver; this family finds the rest and
+    never reports a rule twice.  A `*` rule is dead only if it is dead in
+    every state: a `*` error rule that the `new` rules hide in `new` is the
+    idiom of the stale-status pitfall (docs/language.md 9.2), not dead logic.
+    The witness is an input where the rule's condition holds and shows which
+    rule fires instead.
+E0513 (error) condition always false
+    The condition cannot be true for any input (given the types and the
+    declared ranges): the rule is dead whatever its place in the table.
+W0514 (warning) condition always true
+    A condition that is not the literal `true` but holds for every input, in
+    a state where later rules follow (which it hides).  Write `true` if that
+    is meant.  A tautology in the last rule of its states hides nothing and
+    is not reported.
+W0515 (warning) order-dependent rules
+    Two rules of a state whose conditions can both be true (with no earlier
+    rule true) and which lead to different outcomes: a different next state
+    or different jobs, compared structurally.  Not reported:
+    - in a plan declared `ordered` (`plan X ordered { ... }`): the designer
+      states that the table is prioritized, the paper's "prioritized events";
+    - when the earlier rule leads to `error(...)`: a fault or time-out rule
+      written before the progress rules is the paper's prioritized style, and
+      its priority is the point;
+    - when the later rule can never fire in that state (e.g. a `*` error rule
+      in `new`, hidden by `new` rules that cover every input);
+    - once per pair of rules, not once per state.
+E0516 (error) a new command can go unanswered
+    Inputs for which no rule of `new` fires and `new` has no `otherwise`: the
+    command is accepted (status EXEC) and nothing happens.
+W0517 (warning) a state can wait forever
+    In a named state a cycle in which no rule fires is how a plan waits (for
+    `TB.done`, a sensor, a time-out), so a transient "nothing fires" is not a
+    finding.  What is reported is a wait that cannot end: values of the
+    inputs that cannot change while the plan waits in the state (the
+    command's parameters; locals, status fields and Global Memory that only
+    this controller writes, when `pre` and `post` do not assign them) for
+    which no rule of the state can fire *whatever* the other inputs do
+    (subordinates' status, sensors, time in state, extern results).  This is
+    an exists-forall query.  Only the fixed inputs are the witness; the data
+    also holds one full sample input.  Not reported for a `continuous` plan,
+    which holds its state until the next command by design.  (Why not treat
+    a subordinate's `done`/`error`/`none`, which do not change while nothing
+    is sent to it, as fixed too: whether a subordinate was commanded on the
+    way into the state is a path property; counting `none` as fixed would
+    report every state that waits for two subordinates.)
+W0518 (warning) guard analysis incomplete
+    The solver answered `unknown` or ran out of its budget (per query: a
+    wall-clock timeout, `TIMEOUT_MS`, and a deterministic resource limit,
+    `RLIMIT`, so that results do not depend on the machine), or a condition
+    could not be encoded.  Never a silent pass: the rest of that plan is not
+    analysed and the finding says what was being asked.
+
+f64 and externs make some results approximate (see `rcsc.smt`): findings
+say so in a note.  Every witness is replayed by the reference simulator's
+rule selection (`rcsc.simulate.Simulator.select_rule`) before it is reported;
+a witness that does not show the claim after rounding to doubles is marked
+approximate.
+
+The analysis runs when names and types check (no E00xx-E02xx error): with
+such errors the model holds placeholders that would only give follow-on
+findings.
+
+How it asks: one z3 solver per plan, with a Boolean `rule.i == condition_i`
+per rule, so that every question is a check under assumptions (`rule.i`,
+`not rule.j`, ...) and an unsat core names the rules that hide a dead one.
+Each model found is kept with the truth value of every rule's condition, and
+a later question that such a model already answers is not asked again.
+Witnesses are then made readable (initial values, 0, small magnitudes,
+round numbers) with a few extra queries per finding, never per question.
+
+Plans with the same shape (the same conditions up to the names of their
+inputs, e.g. XAX and YAX, or the Lifecycle plans of many controllers) are
+analysed once: the result is cached under a canonical form of the plan and
+renamed for each plan of that shape (`Options(cache=False)` turns it off).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from dataclasses import dataclass, field, fields
+from types import SimpleNamespace
+
+import z3
+
+from rcsc import model as m
+from rcsc.checks.plans import literal_dead_rules, plan_states, rule_sources
+from rcsc.diagnostics import Diagnostic, Diagnostics, Severity
+from rcsc.model import Design
+from rcsc.smt import (
+    APPROX_ARITH,
+    F,
+    Encoder,
+    Encoding,
+    HasTypeError,
+    Unsupported,
+    concrete,
+    format_value,
+    json_value,
+)
+from rcsc.source import Span
+from rcsc.smt import _and as _z3_and
+from rcsc.smt import _rational as _rational_of
+from rcsc.smt import real_of
+from rcsc.types import DURATION, EnumType, FloatType, RecordType, Type
+
+# The budget of one solver query.  The resource limit is deterministic (the
+# same answer on every machine; 2M units take about 0.8 s on a 2024 laptop);
+# the wall-clock time-out is a safety net for slow machines.
+TIMEOUT_MS = 5000
+RLIMIT = 2_000_000
+
+
+def _env_int(name: str, default: int) -> int:
+    try:
+        return int(os.environ.get(name, default))
+    except ValueError:
+        return default
+
+
+@dataclass
+class Options:
+    """Settings of one run.  The budget defaults can also be set from the
+    environment: RCSC_GUARD_TIMEOUT_MS and RCSC_GUARD_RLIMIT."""
+
+    timeout_ms: int = field(default_factory=lambda: _env_int("RCSC_GUARD_TIMEOUT_MS", TIMEOUT_MS))
+    rlimit: int = field(default_factory=lambda: _env_int("RCSC_GUARD_RLIMIT", RLIMIT))
+    cache: bool = True
+
+
+@dataclass
+class Stats:
+    """What one run of the family did (for the benchmark)."""
+
+    plans: int = 0
+    plans_cached: int = 0
+    queries: int = 0  # solver calls
+    reused: int = 0  # questions answered by an earlier model
+    forall_queries: int = 0
+    seconds: float = 0.0
+
+
+class _Incomplete(Exception):
+    def __init__(self, reason: str, question: str, span: Span | None) -> None:
+        super().__init__(reason)
+        self.reason = reason
+        self.question = question
+        self.span = span
+
+
+def check(design: Design, diags: Diagnostics, options: Options | None = None, stats: Stats | None = None) -> None:
+    opts = options or Options()
+    st = stats if stats is not None else Stats()
+    if front_end_errors(diags):
+        return
+    t0 = time.perf_counter()
+    cache: dict = {}
+    for c in design.controllers.values():
+        assigned = _assigned_in_pre_post(c)
+        for plan in c.plans.values():
+            st.plans += 1
+            _analyse_plan(design, c, plan, assigned, opts, st, diags, cache)
+    st.seconds += time.perf_counter() - t0
+
+
+def _new_solver(opts: Options) -> z3.Solver:
+    s = z3.Solver()
+    s.set("timeout", int(opts.timeout_ms))
+    if opts.rlimit:
+        s.set("rlimit", int(opts.rlimit))
+    return s
+
+
+def front_end_errors(diags: Diagnostics) -> bool:
+    """Whether names or types failed (E00xx-E02xx): the model then holds placeholders
+    (error types, values replaced by 0) that would only give follow-on findings."""
+    return any(d.severity is Severity.ERROR and d.code[1:3] in ("00", "01", "02") for d in diags)
+
+
+# ---- plan structure --------------------------------------------------------------------
+
+
+def _assigned_in_pre_post(c: m.Controller) -> set[tuple[str, str]]:
+    out = set()
+    for s in m.walk_stmts(c.pre + c.post):
+        if isinstance(s, m.Assign):
+            out.add((s.target.kind, s.target.name))
+    return out
+
+
+def _is_fixed(key: tuple, c: m.Controller, assigned: set[tuple[str, str]]) -> bool:
+    """Whether an input keeps its value while the plan waits in a state (no rule fires)."""
+    kind = key[0]
+    if kind == "param":
+        return True
+    if kind in ("local", "status"):
+        return (kind, key[1]) not in assigned
+    if kind == "gm":
+        return any(u.name == key[1] for u in c.writes) and ("gm", key[1]) not in assigned
+    return False
+
+
+def _vkey(v):
+    if isinstance(v, dict):
+        return tuple(sorted((k, _vkey(x)) for k, x in v.items()))
+    if isinstance(v, float) and math.isnan(v):
+        return ("nan",)
+    return (type(v).__name__, v)
+
+
+def _ekey(e: m.Expr):
+    """A structural key of an expression: equal for equal expressions, whatever their spans."""
+    t = type(e)
+    if t is m.Const:
+        return ("c", str(e.type), _vkey(e.value))
+    if t is m.Ref:
+        return ("r", e.kind, e.name)
+    if t is m.InState:
+        return ("t",)
+    if t is m.SubView:
+        return ("s", e.sub, e.attr, e.value)
+    if t is m.Field:
+        return ("f", _ekey(e.obj), e.name)
+    if t is m.Call:
+        return ("call", e.kind, e.func, tuple(_ekey(a) for a in e.args))
+    if t is m.Unary:
+        return ("u", e.op, str(e.type), _ekey(e.operand))
+    if t is m.Binary:
+        return ("b", e.op, str(e.type), _ekey(e.left), _ekey(e.right))
+    if t is m.IfExpr:
+        return ("if", _ekey(e.cond), _ekey(e.then), _ekey(e.else_))
+    return ("?", t.__name__, id(e))  # unknown: equal only to itself
+
+
+def _skey(jobs: list[m.Stmt]) -> tuple:
+    """A structural key of a job list: equal for equal jobs, whatever their spans."""
+    out = []
+    for s in jobs:
+        t = type(s)
+        if t is m.Assign:
+            out.append(("=", s.target.kind, s.target.name, tuple(s.target.path), s.op, _ekey(s.value)))
+        elif t is m.CallStmt:
+            out.append(("call", _ekey(s.call)))
+        elif t is m.Command:
+            out.append(("cmd", s.sub, s.verb, tuple(_ekey(a) for a in s.args)))
+        elif t is m.Report:
+            out.append(("report", s.status))
+        elif t is m.If:
+            out.append(("if", tuple((_ekey(c), _skey(b)) for c, b in s.branches), _skey(s.else_body)))
+        else:
+            out.append(("?", t.__name__, id(s)))
+    return tuple(out)
+
+
+def _target(rule: m.Rule, state: str) -> tuple:
+    k = rule.next.kind
+    if k == "same" or (k == "named" and rule.next.name == state):
+        return ("state", state)
+    if k == "named":
+        return ("state", rule.next.name)
+    if k == "error":
+        return ("error", rule.next.code)
+    return (k,)
+
+
+def _outcome(rule: m.Rule, state: str) -> tuple:
+    return (_target(rule, state), _skey(rule.jobs))
+
+
+def _next_text(rule: m.Rule) -> str:
+    return str(rule.next)
+
+
+# ---- the per-plan analysis -----------------------------------------------------------------
+
+
+@dataclass
+class _Finding:
+    """A finding in terms of rule indexes, states and input keys (so it can be cached)."""
+
+    code: str
+    rules: list[int]  # the rule(s) it is about, the main one first
+    state: str | None = None
+    witness: dict = field(default_factory=dict)  # input key -> value
+    externs: list = field(default_factory=list)  # (func, [arg values], value, [arg types], result type)
+    fires: int | None = None  # rule index that fires at the witness (-1: none)
+    covering: list[int] = field(default_factory=list)
+    hidden: list[int] = field(default_factory=list)
+    sample: dict = field(default_factory=dict)
+    reason: str = ""
+    question: str = ""
+    approx: list[str] = field(default_factory=list)
+    span: Span | None = None
+
+
+class _Sat:
+    def __init__(self, model, vec) -> None:
+        self.model = model
+        self.vec = vec
+
+
+class _Unsat:
+    def __init__(self, core: list[tuple[int, bool]]) -> None:
+        self.core = core
+
+
+class _Analysis:
+    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, opts: Options, st: Stats) -> None:
+        self.design, self.c, self.plan, self.opts, self.st = design, c, plan, opts, st
+        self.assigned = assigned
+        verb = c.verbs.get(plan.verb)
+        cpu = design.cpus.get(c.cpu) if c.cpu else None
+        self.period = cpu.heartbeat_ns if cpu is not None else None
+        self.enc = Encoder(design, c, verb, self.period)
+        self.guarded = [r for r in plan.rules if r.guard is not None]
+        self.encs: dict[int, Encoding] = {}
+        for r in self.guarded:
+            try:
+                self.encs[r.index] = self.enc.guard(r.guard)  # type: ignore[arg-type]
+            except HasTypeError:
+                raise
+            except Unsupported as exc:
+                raise _Incomplete(f"cannot encode the condition ({exc})", f"the condition of `{r.label}`", r.guard_span)
+        self.p = {i: z3.Bool(f"rule.{i}") for i in self.encs}
+        # A solver of its own per plan (not one shared in push/pop scopes):
+        # then a plan's answers and witnesses do not depend on which plans
+        # were analysed before it (about 10% slower).
+        self.solver = _new_solver(opts)
+        for i, e in self.encs.items():
+            self.solver.add(self.p[i] == e.term)
+        for inp in self.enc.inputs.values():
+            self.solver.add(inp.constraint)
+        for s in self.enc.side:
+            self.solver.add(s)
+        self.vectors: list[_Sat] = []
+        # `done` and `error` as current states are E0510: never evaluated.
+        self.states = [s for s in plan_states(plan) if s not in ("done", "error")]
+        self.rules_in: dict[str, list[m.Rule]] = {}
+        self.otherwise: dict[str, m.Rule] = {}
+        for s in self.states:
+            self.rules_in[s] = [r for r in self.guarded if s in rule_sources(r, self.states)]
+        for r in plan.rules:
+            if r.otherwise and r.state.kind != "any":
+                key = r.state.name if r.state.kind == "named" else "new"
+                self.otherwise.setdefault(key or "", r)
+
+    def sources(self, r: m.Rule) -> list[str]:
+        return [s for s in rule_sources(r, self.states) if s in self.rules_in]
+
+    # ---- questions ----
+
+    def query(self, lits: dict[int, bool], question: str, span: Span | None):
+        for v in self.vectors:
+            if all(v.vec[i] == b for i, b in lits.items()):
+                self.st.reused += 1
+                return v
+        assumptions = [self.p[i] if b else z3.Not(self.p[i]) for i, b in lits.items()]
+        self.st.queries += 1
+        r = self.solver.check(*assumptions)
+        if r == z3.sat:
+            model = self.solver.model()
+            vec = {i: z3.is_true(model.eval(p, model_completion=True)) for i, p in self.p.items()}
+            res = _Sat(model, vec)
+            self.vectors.append(res)
+            return res
+        if r == z3.unsat:
+            ids = {a.get_id(): (i, b) for a, (i, b) in zip(assumptions, lits.items())}
+            core = [ids[a.get_id()] for a in self.solver.unsat_core() if a.get_id() in ids]
+            return _Unsat(core)
+        raise _Incomplete(self.solver.reason_unknown() or "unknown", question, span)
+
+    def minimal_core(self, lits: dict[int, bool], core: list[tuple[int, bool]], keep: int | None = None) -> list[int]:
+        """The rules of an unsat core, without those that are not needed (deletion-based; for findings only)."""
+        need = [i for i, _ in core if i != keep]
+        for i in list(need):
+            trial = {j: lits[j] for j in need if j != i}
+            if keep is not None:
+                trial[keep] = lits[keep]
+            self.st.queries += 1
+            if self.solver.check(*self.lits(trial)) == z3.unsat:
+                need.remove(i)
+        return need
+
+    # ---- witness ----
+
+    def inputs_of(self, idxs) -> list[tuple]:
+        keys: dict[tuple, None] = {}
+        for i in idxs:
+            for k in self.encs[i].inputs:
+                keys.setdefault(k, None)
+        return list(keys)
+
+    def lits(self, lits: dict[int, bool]) -> list:
+        return [self.p[i] if b else z3.Not(self.p[i]) for i, b in lits.items()]
+
+    def witness(self, model, idxs, hard: list | None = None):
+        """The values of the inputs of rules `idxs`, made readable first (see `polish`); and the model."""
+        if hard is not None:
+            model = self.polish(self.solver, hard, self.inputs_of(idxs), model)
+        values = {}
+        for k in self.inputs_of(idxs):
+            inp = self.enc.inputs[k]
+            values[k] = concrete(model, inp.term, inp.type, inp.members)
+        externs = []
+        seen = set()
+        for i in idxs:
+            for call in self.encs[i].calls:
+                args = [concrete(model, a, t) for a, t in zip(call.args, call.arg_types)]
+                value = concrete(model, call.result, call.ret)
+                key = (call.func, repr(args))
+                if key not in seen:
+                    seen.add(key)
+                    externs.append((call.func, args, value, call.arg_types, call.ret))
+        return values, externs, model
+
+    def polish(self, solver: z3.Solver, hard: list, keys: list[tuple], model):
+        """A model of `hard` whose input values are simple: initial values, 0, small magnitudes, round numbers.
+
+        A heuristic with a few extra queries per finding (never per question):
+        each input in turn is pinned to the first simple value that keeps
+        `hard` satisfiable, else to its current value.
+        """
+        solver.push()
+        try:
+            for h in hard:
+                solver.add(h)
+            for k in keys:
+                inp = self.enc.inputs[k]
+                model = self._simplest(solver, inp, model)
+                for cst in inp.consts:
+                    solver.add(cst == model.eval(cst, model_completion=True))
+        finally:
+            solver.pop()
+        return model
+
+    def _try(self, solver: z3.Solver, cond) -> object:
+        self.st.queries += 1
+        if solver.check(cond) == z3.sat:
+            return solver.model()
+        return None
+
+    def _simplest(self, solver: z3.Solver, inp, model):
+        t = inp.term
+        pref = _preferred(self.design, self.c, inp.key)
+        if inp.type is None:  # a view: keep what the solver chose
+            return model
+        if z3.is_bool(t) if not isinstance(t, F) else False:
+            cands = [t == bool(pref)] if pref is not None else [z3.Not(t)]
+            for cnd in cands:
+                got = self._try(solver, cnd)
+                if got is not None:
+                    return got
+            return model
+        if isinstance(inp.type, EnumType):
+            if pref is not None:
+                got = self._try(solver, t == inp.type.members.index(pref))
+                if got is not None:
+                    return got
+            return model
+        if isinstance(t, F):
+            cands = []
+            if isinstance(pref, float) and math.isfinite(pref):
+                cands.append(_and_not_nan(t, real_of(pref)))
+            cands.append(_and_not_nan(t, real_of(0.0)))
+            for cnd in cands:
+                got = self._try(solver, cnd)
+                if got is not None:
+                    return got
+            if z3.is_true(model.eval(t.nan, model_completion=True)):
+                got = self._try(solver, z3.Not(t.nan))
+                if got is None:
+                    return model
+                model = got
+            v = float(_rational_of(model.eval(t.r, model_completion=True)))
+            for digits in (0, 1, 2, 3):
+                r = round(v, digits)
+                if r == v:
+                    return model
+                got = self._try(solver, _and_not_nan(t, real_of(float(r))))
+                if got is not None:
+                    return got
+            return model
+        # integers and durations: the initial value, 0, else the smallest magnitude
+        cands = [t == pref] if isinstance(pref, int) and not isinstance(pref, bool) and pref != 0 else []
+        cands.append(t == 0)
+        for cnd in cands:
+            got = self._try(solver, cnd)
+            if got is not None:
+                return got
+        mag = z3.If(t < 0, -t, t)
+        hi = model.eval(mag, model_completion=True).as_long()
+        lo = 0
+        if hi <= 10:
+            return model
+        while lo < hi:
+            mid = (lo + hi) // 2
+            got = self._try(solver, mag <= mid)
+            if got is not None:
+                model, hi = got, got.eval(mag, model_completion=True).as_long()
+            else:
+                lo = mid + 1
+        return model
+
+    def approx(self, idxs) -> list[str]:
+        out: dict[str, None] = {}
+        for i in idxs:
+            e = self.encs[i]
+            if e.f64_arith:
+                out.setdefault(APPROX_ARITH, None)
+            for a in sorted(e.approx):
+                out.setdefault(a, None)
+        return list(out)
+
+    # ---- the analysis ----
+
+    def run(self, lit_dead: dict[int, m.Rule]) -> list[_Finding]:
+        out: list[_Finding] = []
+        # Rules in no analysed state (`done` as a current state, E0510) and the
+        # literal dead rules (E0506 from the plans family) are not analysed.
+        skip = set(lit_dead) | {r.index for r in self.guarded if not self.sources(r)}
+        # 1. Rules that can never fire: their condition is never true (E0513),
+        # or earlier rules hide them in every state (E0506).  A rule that can
+        # fire somewhere (the common case) needs no question of its own.
+        live: dict[tuple[int, str], bool] = {}
+        for r in self.guarded:
+            if r.index in skip:
+                continue
+            covering: dict[int, None] = {}
+            example = None
+            never = False
+            for s in self.sources(r):
+                before = [x.index for x in self.rules_in[s] if x.index < r.index]
+                lits = {i: False for i in before}
+                lits[r.index] = True
+                res = self.query(lits, f"whether `{r.label}` can fire in state `{s}`", r.label_span)
+                live[(r.index, s)] = isinstance(res, _Sat)
+                if isinstance(res, _Sat):
+                    break
+                cover = self.minimal_core(lits, res.core, keep=r.index)
+                if not cover:  # unsat without any earlier rule: the condition itself
+                    never = True
+                    break
+                for i in cover:
+                    covering.setdefault(i, None)
+                if example is None:
+                    example = (s, before)
+            if never:
+                out.append(_Finding("E0513", [r.index], approx=self.approx([r.index])))
+                skip.add(r.index)
+                continue
+            if any(live.get((r.index, s)) for s in self.sources(r)):
+                continue
+            f = _Finding("E0506", [r.index], covering=sorted(covering))
+            if example is not None:
+                s, before = example
+                res = self.query({r.index: True}, f"an example for `{r.label}`", r.label_span)
+                if isinstance(res, _Sat):
+                    upto = [x.index for x in self.rules_in[s] if x.index <= r.index]
+                    f.witness, f.externs, model = self.witness(res.model, upto, self.lits({r.index: True}))
+                    f.state = s
+                    f.fires = next((i for i in before if z3.is_true(model.eval(self.p[i], model_completion=True))), None)
+            f.approx = self.approx([r.index] + f.covering)
+            out.append(f)
+            skip.add(r.index)
+        # 2. Per state: a dead `otherwise`, or inputs for which nothing fires.
+        for s in self.states:
+            rules = self.rules_in[s]
+            idxs = [x.index for x in rules]
+            other = self.otherwise.get(s)
+            if other is not None:
+                if other.index in lit_dead or not rules:
+                    continue
+                res = self.query({i: False for i in idxs}, f"whether `otherwise` of `{s}` can fire", other.label_span)
+                if isinstance(res, _Unsat):
+                    cover = self.minimal_core({i: False for i in idxs}, res.core)
+                    out.append(_Finding("E0506", [other.index], state=s, covering=sorted(cover), approx=self.approx(idxs)))
+                continue
+            if not rules:
+                continue
+            if s == "new":
+                res = self.query({i: False for i in idxs}, "whether a rule of `new` always fires", rules[0].label_span)
+                if isinstance(res, _Sat):
+                    w, ex, _ = self.witness(res.model, idxs, self.lits({i: False for i in idxs}))
+                    out.append(_Finding("E0516", idxs, state=s, witness=w, externs=ex, fires=-1, approx=self.approx(idxs)))
+            elif not self.plan.continuous:  # a continuous plan holds its state until superseded
+                f = self.forever(s, rules)
+                if f is not None:
+                    out.append(f)
+        # 3. Tautologies that hide later rules.
+        for r in self.guarded:
+            if r.index in skip or (isinstance(r.guard, m.Const) and r.guard.value is True):
+                continue
+            hidden: dict[int, None] = {}
+            for s in self.sources(r):
+                for x in self.rules_in[s]:
+                    if x.index > r.index:
+                        hidden.setdefault(x.index, None)
+                o = self.otherwise.get(s)
+                if o is not None:
+                    hidden.setdefault(o.index, None)
+            if not hidden:
+                continue
+            res = self.query({r.index: False}, f"whether the condition of `{r.label}` can be false", r.guard_span)
+            if isinstance(res, _Unsat):
+                out.append(_Finding("W0514", [r.index], hidden=sorted(hidden), approx=self.approx([r.index])))
+        # 4. Pairs of rules that can both be true with different outcomes.
+        if not self.plan.ordered:
+            reported: set[tuple[int, int]] = set()
+            for s in self.states:
+                rules = [x for x in self.rules_in[s] if x.index not in skip]
+                for a, ri in enumerate(rules):
+                    if ri.next.kind == "error":
+                        continue
+                    for rj in rules[a + 1:]:
+                        pair = (ri.index, rj.index)
+                        if pair in reported or _outcome(ri, s) == _outcome(rj, s):
+                            continue
+                        if not self._live(rj, s, live):
+                            continue
+                        before = [x.index for x in self.rules_in[s] if x.index < ri.index]
+                        lits = {i: False for i in before}
+                        lits[ri.index] = True
+                        lits[rj.index] = True
+                        res = self.query(lits, f"whether `{ri.label}` and `{rj.label}` can both be true in `{s}`", rj.label_span)
+                        if isinstance(res, _Sat):
+                            reported.add(pair)
+                            upto = [x.index for x in self.rules_in[s] if x.index <= rj.index]
+                            w, ex, _ = self.witness(res.model, upto, self.lits(lits))
+                            out.append(_Finding("W0515", [rj.index, ri.index], state=s, witness=w, externs=ex, fires=ri.index, approx=self.approx(upto)))
+        return out
+
+    def _live(self, r: m.Rule, s: str, live: dict) -> bool:
+        if (r.index, s) in live:
+            return live[(r.index, s)]
+        before = [x.index for x in self.rules_in[s] if x.index < r.index]
+        lits = {i: False for i in before}
+        lits[r.index] = True
+        res = self.query(lits, f"whether `{r.label}` can fire in state `{s}`", r.label_span)
+        live[(r.index, s)] = isinstance(res, _Sat)
+        return live[(r.index, s)]
+
+    def forever(self, s: str, rules: list[m.Rule]) -> _Finding | None:
+        """Exists fixed inputs such that for all other inputs no rule of `s` fires."""
+        idxs = [x.index for x in rules]
+        keys = self.inputs_of(idxs)
+        fixed = [k for k in keys if _is_fixed(k, self.c, self.assigned)]
+        if not fixed:
+            return None  # then only conditions that are never true can stall it (E0513)
+        varying = [k for k in keys if k not in fixed]
+        body = z3.And(*[z3.Not(self.encs[i].term) for i in idxs]) if idxs else z3.BoolVal(True)
+        side = list(self.enc.side)
+        # Unknown functions (externs, non-linear f64) are not chosen by the
+        # adversary: their results count as inputs that vary.
+        apps = _uninterpreted_apps([body] + side)
+        fresh = [z3.Const(f"free.{n}", a.sort()) for n, a in enumerate(apps)]
+        pairs = list(zip(apps, fresh))
+        if pairs:
+            body = z3.substitute(body, *pairs)
+            side = [z3.substitute(x, *pairs) for x in side]
+        vconsts = [cst for k in varying for cst in self.enc.inputs[k].consts] + fresh
+        vcons = z3.And(*([self.enc.inputs[k].constraint for k in varying] + side)) if (varying or side) else z3.BoolVal(True)
+        formula = z3.Implies(vcons, body)
+        if vconsts:
+            formula = z3.ForAll(vconsts, formula)
+        solver = _new_solver(self.opts)
+        try:
+            for k in fixed:
+                solver.add(self.enc.inputs[k].constraint)
+            solver.add(formula)
+            self.st.queries += 1
+            self.st.forall_queries += 1
+            r = solver.check()
+            if r == z3.unsat:
+                return None
+            if r != z3.sat:
+                raise _Incomplete(solver.reason_unknown() or "unknown", f"whether state `{s}` can wait forever", rules[0].label_span)
+            model = self.polish(solver, [], fixed, solver.model())
+        finally:
+            del solver
+        values = {k: concrete(model, self.enc.inputs[k].term, self.enc.inputs[k].type, self.enc.inputs[k].members) for k in fixed}
+        f = _Finding("W0517", idxs, state=s, witness=values, fires=-1, approx=self.approx(idxs))
+        # One full input of that kind, for the replay.
+        self.solver.push()
+        try:
+            for k in fixed:
+                for cst in self.enc.inputs[k].consts:
+                    self.solver.add(cst == model.eval(cst, model_completion=True))
+            self.st.queries += 1
+            r2 = self.solver.check(*[z3.Not(self.p[i]) for i in idxs])
+            if r2 == z3.sat:
+                f.sample, f.externs, _ = self.witness(self.solver.model(), idxs, self.lits({i: False for i in idxs}))
+        finally:
+            self.solver.pop()
+        return f
+
+
+def _and_not_nan(t: F, r):
+    return _z3_and(z3.Not(t.nan), t.r == r)
+
+
+def _preferred(design: Design, c: m.Controller, key: tuple):
+    """The value a witness shows for an input when it can: the variable's initial value."""
+    kind = key[0]
+    var = None
+    if kind == "gm":
+        var = design.gm.get(key[1])
+    elif kind == "local":
+        var = c.locals.get(key[1])
+    elif kind == "status":
+        var = c.status_fields.get(key[1])
+    elif kind == "subfield":
+        sub = design.controllers.get(key[1])
+        var = sub.status_fields.get(key[2]) if sub else None
+        key = key[1:]
+    if var is None or var.init is None:
+        return None
+    value = var.init
+    for p in key[2:]:
+        if not isinstance(value, dict):
+            return None
+        value = value.get(p)
+    return value
+
+
+def _uninterpreted_apps(terms) -> list:
+    """Applications of uninterpreted functions (arity > 0) and extern constants in `terms`."""
+    seen: set[int] = set()
+    out = []
+    stack = list(terms)
+    while stack:
+        t = stack.pop()
+        if t.get_id() in seen:
+            continue
+        seen.add(t.get_id())
+        if z3.is_app(t):
+            d = t.decl()
+            if d.kind() == z3.Z3_OP_UNINTERPRETED and (t.num_args() > 0 or d.name().startswith("extern.")):
+                out.append(t)
+                continue
+            stack.extend(t.children())
+        elif z3.is_quantifier(t):
+            stack.append(t.body())
+    out.sort(key=lambda t: t.get_id())
+    return out
+
+
+# ---- cache: plans of the same shape --------------------------------------------------------
+
+
+class _Canon:
+    """A canonical text of a plan's analysis problem, with its inputs numbered in order of use."""
+
+    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, period) -> None:
+        self.design, self.c = design, c
+        self.keys: dict[tuple, int] = {}
+        self.parts: list = [plan.ordered, period]
+        verb = c.verbs.get(plan.verb)
+        self.params = {p.name: p for p in verb.params} if verb else {}
+        self.assigned = assigned
+        self.fns: set[str] = set()
+        states = {"new": "new"}
+        for r in plan.rules:
+            for ref in (r.state, r.next):
+                if ref.kind == "named" and ref.name not in states:
+                    states[ref.name] = f"s{len(states)}"  # type: ignore[index]
+        self.states = states
+        jobs: dict = {}
+        for r in plan.rules:
+            nxt = r.next
+            ntext = states.get(nxt.name or "", "") if nxt.kind == "named" else (nxt.kind, nxt.code)
+            jk = _skey(r.jobs)
+            jobs.setdefault(jk, len(jobs))
+            st = states.get(r.state.name or "", "") if r.state.kind == "named" else r.state.kind
+            self.parts.append(("rule", st, ntext, jobs[jk], None if r.guard is None else self.expr(r.guard)))
+
+    def key_of(self, key: tuple) -> int:
+        if key not in self.keys:
+            self.keys[key] = len(self.keys)
+            self.parts.append(("input", len(self.keys) - 1) + self.describe(key))
+        return self.keys[key]
+
+    def describe(self, key: tuple) -> tuple:
+        kind = key[0]
+        fixed = _is_fixed(key, self.c, self.assigned)
+        if kind == "view":
+            return ("view", tuple(self.design.controllers[key[1]].statuses))
+        if kind in ("error_code", "age", "in_state"):
+            return (kind,)
+        var = None
+        if kind == "gm":
+            var = self.design.gm.get(key[1])
+        elif kind == "local":
+            var = self.c.locals.get(key[1])
+        elif kind == "status":
+            var = self.c.status_fields.get(key[1])
+        elif kind == "param":
+            var = self.params.get(key[1])
+        elif kind == "subfield":
+            var = self.design.controllers[key[1]].status_fields.get(key[2])
+        if var is None:
+            return (kind, "?")
+        rng = (var.range.lo, var.range.hi) if var.range is not None else None
+        tail = key[3:] if kind == "subfield" else key[2:]
+        return (kind == "param", fixed, str(var.type), rng, tail)
+
+    def expr(self, e: m.Expr, in_fn: bool = False):
+        t = type(e)
+        if t is m.Const:
+            return ("c", str(e.type), _vkey(e.value))
+        if t is m.Ref:
+            if e.kind == "arg":
+                return ("arg", e.name)
+            return ("v", self.key_of((e.kind, e.name)), tuple())
+        if t is m.InState:
+            return ("v", self.key_of(("in_state",)))
+        if t is m.SubView:
+            if e.attr in ("done", "error", "executing", "status"):
+                return ("view", self.key_of(("view", e.sub)), e.attr, e.value)
+            if e.attr == "field":
+                return ("v", self.key_of(("subfield", e.sub, e.value)))
+            return ("v", self.key_of((e.attr, e.sub)))
+        if t is m.Field:
+            return ("f", self.expr(e.obj), e.name)
+        if t is m.Call:
+            if e.kind == "fn":
+                self.fns.add(e.func)
+            return ("call", e.kind, e.func, str(e.type), tuple(self.expr(a) for a in e.args))
+        if t is m.Unary:
+            return ("u", e.op, str(e.type), self.expr(e.operand))
+        if t is m.Binary:
+            return ("b", e.op, str(e.type), str(e.left.type), self.expr(e.left), self.expr(e.right))
+        if t is m.IfExpr:
+            return ("if", str(e.type), self.expr(e.cond), self.expr(e.then), self.expr(e.else_))
+        return ("?", t.__name__)
+
+    def key(self) -> tuple:
+        return tuple(self.parts)
+
+
+# ---- reporting -------------------------------------------------------------------------
+
+
+def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts: Options, st: Stats, diags: Diagnostics, cache: dict) -> None:
+    if not any(r.guard is not None for r in plan.rules):
+        return
+    if plan.verb not in c.verbs:
+        return
+    lit_dead = literal_dead_rules(plan)
+    cpu = design.cpus.get(c.cpu) if c.cpu else None
+    period = cpu.heartbeat_ns if cpu is not None else None
+    canon = None
+    if opts.cache:
+        canon = _Canon(design, c, plan, assigned, period)
+        ckey = canon.key()
+        hit = cache.get(ckey)
+        if hit is not None:
+            st.plans_cached += 1
+            findings, order, states = hit
+            mapping = dict(zip(order, canon.keys))
+            by_canon = {v: k for k, v in canon.states.items()}
+            state_map = {k: by_canon[v] for k, v in states.items()}
+            for f in findings:
+                _report(design, c, plan, _rename(f, mapping, state_map), diags)
+            return
+    try:
+        an = _Analysis(design, c, plan, assigned, opts, st)
+        findings = an.run(lit_dead)
+    except HasTypeError:
+        return
+    except _Incomplete as inc:
+        _report(design, c, plan, _Finding("W0518", [], reason=inc.reason, question=inc.question, span=inc.span), diags)
+        return
+    if canon is not None:
+        cache[canon.key()] = (findings, list(canon.keys), dict(canon.states))
+    for f in findings:
+        _report(design, c, plan, f, diags)
+
+
+def _rename_key(key: tuple, mapping: dict[tuple, tuple]) -> tuple:
+    for n in (3, 2, 1):
+        base = key[:n]
+        if base in mapping:
+            return mapping[base] + key[n:]
+    return key
+
+
+def _rename(f: _Finding, mapping: dict, states: dict) -> _Finding:
+    """A cached plan's finding in the names of a plan of the same shape."""
+    g = _Finding(**{fl.name: getattr(f, fl.name) for fl in fields(_Finding)})
+    g.state = states.get(f.state, f.state) if f.state is not None else None
+    g.witness = {_rename_key(k, mapping): v for k, v in f.witness.items()}
+    g.sample = {_rename_key(k, mapping): v for k, v in f.sample.items()}
+    return g
+
+
+def _reason_text(reason: str) -> str:
+    if reason in ("canceled", "timeout") or "resource limit" in reason:
+        return f"it ran out of its budget (a resource limit of {RLIMIT:,} units or {TIMEOUT_MS / 1000:g} s per question by default; solver: {reason})"
+    return reason
+
+
+def _labels(plan: m.Plan, idxs) -> str:
+    names = [f"`{plan.rules[i].label}`" for i in idxs]
+    if len(names) <= 1:
+        return "".join(names)
+    return ", ".join(names[:-1]) + " and " + names[-1]
+
+
+def _report(design: Design, c: m.Controller, plan: m.Plan, f: _Finding, diags: Diagnostics) -> None:
+    rules = plan.rules
+    where = f"plan `{plan.verb}` of `{c.name}`"
+    data: dict = {"controller": c.name, "plan": plan.verb}
+    d: Diagnostic
+    if f.code == "W0518":
+        span = f.span or plan.name_span
+        d = diags.add("W0518", span, f"guard analysis of {where} is incomplete", "not analysed")
+        d.with_note(f"the solver could not decide {f.question}: {_reason_text(f.reason)}")
+        d.with_note("the rest of this plan's conditions were not analysed")
+        d.with_help("simplify the condition, or move arithmetic into `pre` (a local the rule compares)")
+        data["reason"] = f.reason
+        d.data = data
+        return
+    main = rules[f.rules[0]]
+    data["rules"] = [rules[i].label for i in f.rules]
+    if f.state is not None:
+        data["state"] = f.state
+    if f.code == "E0513":
+        d = diags.add("E0513", main.guard_span, f"the condition of rule `{main.label}` is never true", "always false")
+        d.with_note(f"so `{main.label}` can never fire, wherever it stands in the table")
+        d.with_help("correct the condition, or remove the rule")
+    elif f.code == "W0514":
+        d = diags.add("W0514", main.guard_span, f"the condition of rule `{main.label}` is always true", "always true")
+        d.with_note(f"it hides {_labels(plan, f.hidden)} after it" + (", which can never fire" if f.hidden else ""))
+        d.with_help("write `true` if that is meant, or correct the condition")
+        data["hidden"] = [rules[i].label for i in f.hidden]
+    elif f.code == "E0506":
+        what = "`otherwise`" if main.otherwise else f"rule `{main.label}`"
+        d = diags.add("E0506", main.label_span, f"{what} can never fire", "dead rule")
+        for i in f.covering:
+            d.with_label(rules[i].guard_span, f"`{rules[i].label}`")
+        if main.otherwise:
+            d.with_note(f"in state `{f.state}` the rules {_labels(plan, f.covering)} together match every input")
+        else:
+            d.with_note(f"whenever its condition holds, an earlier rule matches: {_labels(plan, f.covering)}")
+        data["covered_by"] = [rules[i].label for i in f.covering]
+    elif f.code == "E0516":
+        own = [i for i in f.rules if rules[i].state.kind == "new"]
+        main = rules[own[0]] if own else main
+        d = diags.add("E0516", main.label_span, f"a new `{plan.verb}` command can leave every rule of `new` false", "no rule fires")
+        for i in f.rules:
+            if rules[i] is not main:
+                d.with_label(rules[i].label_span, "also false")
+        d.with_note(f"then the command is accepted (status EXEC) and {where} stays in `new`")
+        d.with_help("add a rule for the missing case, or an `otherwise` rule for `new`")
+    elif f.code == "W0517":
+        d = diags.add("W0517", main.label_span, f"state `{f.state}` of {where} can wait forever", "no rule can fire")
+        d.with_note("no rule of the state can fire, whatever the inputs that change while it waits (subordinates, sensors, time in state)")
+        d.with_help(f"add a rule for this case, an `otherwise` for `{f.state}`, or a time-out (`in_state >= ...`)")
+    elif f.code == "W0515":
+        first = rules[f.fires]  # type: ignore[index]
+        d = diags.add("W0515", main.label_span, f"rules `{first.label}` and `{main.label}` can both be true in state `{f.state}`", "also true")
+        d.with_label(first.label_span, f"`{first.label}` fires first")
+        d.with_note(f"`{first.label}` (-> {_next_text(first)}) fires and `{main.label}` (-> {_next_text(main)}) does not: the order of the table decides")
+        d.with_help(f"make the conditions exclusive, or declare `plan {plan.verb} ordered` if the order is intended")
+    else:  # pragma: no cover
+        raise KeyError(f.code)
+    if f.witness:
+        text, wjson = _witness_text(design, c, plan, f.witness)
+        ext_text, ext_json = _externs_text(f.externs)
+        if f.code == "W0517":
+            d.with_note(f"witness: {text}" + " (fixed while the plan waits)")
+        elif f.code == "E0506":
+            fired = rules[f.fires].label if f.fires is not None else "an earlier rule"
+            d.with_note(f"witness: {text}{ext_text}: `{main.label}`'s condition holds but `{fired}` fires")
+            data["fires"] = fired
+        else:
+            d.with_note(f"witness: {text}{ext_text}")
+        data["witness"] = wjson
+        if ext_json:
+            data["externs"] = ext_json
+        if f.sample:
+            data["sample"] = _witness_text(design, c, plan, f.sample)[1]
+        if f.code in ("E0516", "W0517"):
+            data["fires"] = None
+        elif f.code == "W0515":
+            data["fires"] = rules[f.fires].label  # type: ignore[index]
+        ok = _replays(design, c, plan, f)
+        if not ok:
+            d.with_note("the witness is approximate: rounded to doubles, the reference evaluator does not show the claim")
+        data["replayed"] = ok
+    if f.approx:
+        d.with_note("approximate: " + "; ".join(f.approx))
+        data["approximate"] = list(f.approx)
+    d.data = data
+
+
+def _witness_text(design: Design, c: m.Controller, plan: m.Plan, values: dict) -> tuple[str, dict]:
+    parts, out = [], {}
+    for key, value in values.items():
+        name, t = _name_type(design, c, plan, key)
+        parts.append(f"{name} = {format_value(value, t)}")
+        out[name] = json_value(value, t)
+    return ", ".join(parts), out
+
+
+def _externs_text(externs: list) -> tuple[str, list]:
+    if not externs:
+        return "", []
+    parts, out = [], []
+    for func, args, value, arg_types, ret in externs:
+        call = f"{func}({', '.join(format_value(a, t) for a, t in zip(args, arg_types))})"
+        parts.append(f"{call} = {format_value(value, ret)}")
+        out.append({"function": func, "args": [json_value(a, t) for a, t in zip(args, arg_types)], "value": json_value(value, ret)})
+    return ", with " + ", ".join(parts), out
+
+
+def _name_type(design: Design, c: m.Controller, plan: m.Plan, key: tuple) -> tuple[str, Type | None]:
+    kind = key[0]
+    if kind == "in_state":
+        return "in_state", DURATION
+    if kind == "view":
+        return key[1], None
+    if kind == "error_code":
+        from rcsc.types import I32
+
+        return f"{key[1]}.error_code", I32
+    if kind == "age":
+        return f"{key[1]}.age", DURATION
+    if kind == "subfield":
+        var = design.controllers[key[1]].status_fields[key[2]]
+        return ".".join(key[1:]), _leaf_type(var.type, key[3:])
+    var = _var_of(design, c, plan, kind, key[1])
+    prefix = "cmd." if kind == "param" else ""
+    return prefix + ".".join(key[1:]), _leaf_type(var.type, key[2:]) if var else None
+
+
+def _var_of(design: Design, c: m.Controller, plan: m.Plan, kind: str, name: str) -> m.Var | None:
+    if kind == "gm":
+        return design.gm.get(name)
+    if kind == "local":
+        return c.locals.get(name)
+    if kind == "status":
+        return c.status_fields.get(name)
+    if kind == "param":
+        verb = c.verbs.get(plan.verb)
+        return verb.param(name) if verb else None
+    return None
+
+
+def _leaf_type(t: Type, path: tuple) -> Type:
+    for p in path:
+        assert isinstance(t, RecordType)
+        t = t.field_type(p)  # type: ignore[assignment]
+    return t
+
+
+# ---- replay: the witness in the reference simulator ------------------------------------------
+
+
+def witness_keys(design: Design, controller: str, plan_verb: str, witness: dict) -> dict[tuple, object]:
+    """Parse a JSON witness (`Diagnostic.data["witness"]`) back into input keys and simulator values."""
+    c = design.controllers[controller]
+    plan = c.plans[plan_verb]
+    subs = {u.name for u in c.subordinates}
+    out = {}
+    for name, value in witness.items():
+        parts = tuple(name.split("."))
+        if name == "in_state":
+            key = ("in_state",)
+        elif parts[0] == "cmd":
+            key = ("param",) + parts[1:]
+        elif parts[0] in subs:
+            if len(parts) == 1:
+                key = ("view", parts[0])
+            elif parts[1] in ("error_code", "age"):
+                key = (parts[1], parts[0])
+            else:
+                key = ("subfield",) + parts
+        elif parts[0] in c.locals:
+            key = ("local",) + parts
+        elif parts[0] in c.status_fields:
+            key = ("status",) + parts
+        else:
+            key = ("gm",) + parts
+        _, t = _name_type(design, c, plan, key)
+        out[key] = _from_json(value, t)
+    return out
+
+
+def _from_json(value, t: Type | None):
+    if isinstance(t, EnumType) and isinstance(value, str):
+        return value.split(".", 1)[1] if "." in value else value
+    if isinstance(t, FloatType):
+        if isinstance(value, str):
+            return {"NaN": math.nan, "inf": math.inf, "-inf": -math.inf}[value]
+        return float(value)
+    return value
+
+
+def extern_table(externs: list) -> dict:
+    """Extern implementations that return the witness's values (for a Simulator's `externs`)."""
+    table: dict[str, list] = {}
+    for item in externs:
+        if isinstance(item, dict):  # from Diagnostic.data["externs"] (JSON values)
+            func, args, value = item["function"], item["args"], item["value"]
+        else:
+            func, args, value = item[:3]
+        table.setdefault(func, []).append((args, value))
+
+    def make(entries):
+        def impl(*args):
+            for a, v in entries:
+                if _same(list(args), a):
+                    return v
+            return entries[0][1]
+
+        return impl
+
+    return {f: make(e) for f, e in table.items()}
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, list) and isinstance(b, list):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
+        return True
+    return a == b
+
+
+def apply_witness(sim, controller: str, plan: m.Plan, state: str, values: dict[tuple, object]):
+    """Put `sim`'s runtime of `controller` into `state` of `plan` with the witness's inputs.
+
+    `sim` is a `rcsc.simulate.Simulator` (or anything with its `design`,
+    `cycle`, `period_ns` and `externs`).  Returns the `_StepEnv` to pass to
+    `Simulator.select_rule(plan, state, env)`.  Inputs the witness does not
+    name keep their initial values.
+    """
+    from rcsc.simulate import CommandBuffer, ControllerRuntime, StatusBuffer, _StepEnv, clone, zero_value
+
+    design = sim.design
+    c = design.controllers[controller]
+    runtimes = getattr(sim, "runtimes", None)
+    rt = runtimes[controller] if runtimes is not None else ControllerRuntime(c)
+    rt.plan, rt.idle = plan, False
+    rt.status.state = state
+    rt.gm = {u.name: clone(design.gm[u.name].init) for u in rt.gm_uses if u.name in design.gm}
+    verb = c.verbs[plan.verb]
+    rt.cmd = CommandBuffer(1, plan.verb, {p.name: zero_value(p.type) for p in verb.params})
+    rt.status.echo_serial = 1
+    rt.subs = {}
+    for u in c.subordinates:
+        sc = design.controllers[u.name]
+        rt.subs[u.name] = StatusBuffer(fields={k: clone(v.init) for k, v in sc.status_fields.items()})
+        rt.last_sent[u.name] = 0
+    period = sim.period_ns or 1
+    in_state, ages = 0, {}
+    for key, value in values.items():
+        kind = key[0]
+        if kind == "in_state":
+            in_state = int(value) // period  # type: ignore[call-overload]
+        elif kind == "age":
+            ages[key[1]] = int(value) // period  # type: ignore[call-overload]
+        elif kind == "view":
+            st = rt.subs[key[1]]
+            if value == "none":
+                rt.last_sent[key[1]] = 0
+            else:
+                rt.last_sent[key[1]] = 2
+                st.echo_serial = 1 if value == "executing" else 2
+                st.status = {"executing": m.EXEC, "done": m.DONE, "error": m.ERROR}.get(
+                    value, design.controllers[key[1]].statuses.get(value, m.EXEC)  # type: ignore[arg-type]
+                )
+        elif kind == "error_code":
+            rt.subs[key[1]].error_code = int(value)  # type: ignore[call-overload]
+        elif kind == "subfield":
+            _store(rt.subs[key[1]].fields, key[2:], value)
+        elif kind == "param":
+            _store(rt.cmd.args, key[1:], value)
+        elif kind == "local":
+            _store(rt.locals, key[1:], value)
+        elif kind == "status":
+            _store(rt.fields, key[1:], value)
+        elif kind == "gm":
+            _store(rt.gm, key[1:], value)
+    sim.cycle = 1 + max([in_state] + list(ages.values()))
+    rt.entry_cycle = sim.cycle - in_state
+    for sub, age in ages.items():
+        rt.subs[sub].stamp = sim.cycle - age
+    return _StepEnv(sim, rt)
+
+
+def _store(container: dict, path: tuple, value) -> None:
+    for p in path[:-1]:
+        container = container[p]
+    container[path[-1]] = value
+
+
+def _replays(design: Design, c: m.Controller, plan: m.Plan, f: _Finding) -> bool:
+    """Whether the reference simulator's rule selection shows the finding at its witness."""
+    from rcsc.evaluate import eval_expr
+    from rcsc.simulate import Simulator
+
+    values = f.sample if f.code == "W0517" else f.witness
+    if f.state is None or not values and f.code != "W0517":
+        return True
+    cpu = design.cpus.get(c.cpu) if c.cpu else None
+    sim = SimpleNamespace(design=design, cycle=0, period_ns=cpu.heartbeat_ns if cpu else 1, externs=extern_table(f.externs))
+    try:
+        env = apply_witness(sim, c.name, plan, f.state, values)
+        fired = Simulator.select_rule(None, plan, f.state, env)  # type: ignore[arg-type]
+        if f.code in ("E0516", "W0517"):
+            return fired is None
+        main = plan.rules[f.rules[0]]
+        if f.fires is None or fired is None or fired.index != f.fires:
+            return False
+        return bool(eval_expr(main.guard, env)) if main.guard is not None else True
+    except Exception:  # noqa: BLE001 - a witness that cannot be replayed is approximate, not a crash
+        return False
