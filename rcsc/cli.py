@@ -111,6 +111,15 @@ def _load_driver() -> ModuleType:
     return driver
 
 
+def _check(path: str):
+    """Run the front end on `path`; an unreadable root file is a usage error (exit 2)."""
+    driver = _load_driver()
+    try:
+        return driver.check_path(path)
+    except driver.InputError as exc:
+        raise UsageError(str(exc)) from exc
+
+
 def _add_check_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("path", metavar="PATH", help="the design's root file (it begins with `design NAME`)")
     _add_report_arguments(p)
@@ -128,11 +137,7 @@ def _add_report_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_check(args: argparse.Namespace) -> int:
-    driver = _load_driver()
-    try:
-        result = driver.check_path(args.path)
-    except driver.InputError as exc:
-        raise UsageError(str(exc)) from exc
+    result = _check(args.path)
     color = args.format == "human" and _use_color(args.color, args.output)
     _emit_report(_render(result.diags, args.format, color), args.output)
     return _exit_code(result.diags, args.deny_warnings)
@@ -189,11 +194,7 @@ def _run_sim(args: argparse.Namespace) -> int:
     from rcsc.scenario import text_to_scenario
     from rcsc.source import SourceFile
 
-    driver = _load_driver()
-    try:
-        result = driver.check_path(args.path)
-    except driver.InputError as exc:
-        raise UsageError(str(exc)) from exc
+    result = _check(args.path)
     if not result.ok or result.model is None:
         _report_to_stderr(result.diags)
         return EXIT_FINDINGS
@@ -288,11 +289,7 @@ def _add_budget_arguments(p: argparse.ArgumentParser) -> None:
 def _run_budget(args: argparse.Namespace) -> int:
     from rcsc.checks.timing import format_budget_table
 
-    driver = _load_driver()
-    try:
-        result = driver.check_path(args.path)
-    except driver.InputError as exc:
-        raise UsageError(str(exc)) from exc
+    result = _check(args.path)
     if result.model is None:
         _report_to_stderr(result.diags)
         return EXIT_FINDINGS
@@ -321,11 +318,7 @@ def _add_graph_arguments(p: argparse.ArgumentParser) -> None:
 def _run_graph(args: argparse.Namespace) -> int:
     from rcsc import graph
 
-    driver = _load_driver()
-    try:
-        result = driver.check_path(args.path)
-    except driver.InputError as exc:
-        raise UsageError(str(exc)) from exc
+    result = _check(args.path)
     if result.model is None:
         _report_to_stderr(result.diags)
         return EXIT_FINDINGS
@@ -364,11 +357,7 @@ def _add_doc_arguments(p: argparse.ArgumentParser) -> None:
 def _run_doc(args: argparse.Namespace) -> int:
     from rcsc import doc, graph
 
-    driver = _load_driver()
-    try:
-        result = driver.check_path(args.path)
-    except driver.InputError as exc:
-        raise UsageError(str(exc)) from exc
+    result = _check(args.path)
     if result.model is None:
         _report_to_stderr(result.diags)
         return EXIT_FINDINGS
