@@ -363,6 +363,8 @@ def _run_doc(args: argparse.Namespace) -> int:
         return EXIT_FINDINGS
     try:
         doc.write_site(result.model, result.diags.items, args.output)
+    except doc.NotOurs as exc:
+        raise UsageError(str(exc)) from exc
     except OSError as exc:
         raise UsageError(f"cannot write to `{args.output}`: {exc.strerror or exc}") from exc
     if not graph.dot_available():

@@ -266,3 +266,21 @@ def test_browser_check_catches_a_script_error(tmp_path: Path) -> None:
     dom = chromium(["--dump-dom", path.resolve().as_uri()], tmp_path / "profile")
     assert "no_such_function is not defined" in (re.search(r'data-js-errors="([^"]*)"', dom.stdout) or [""])[0]
     assert console_errors(dom.stderr)
+
+
+def test_doc_never_overwrites_a_page_a_person_wrote(tmp_path: Path, capsys) -> None:
+    from rcsc.cli import main
+
+    site = tmp_path / "site"
+    site.mkdir()
+    mine = site / "index.html"
+    mine.write_text("<html><body>my notes</body></html>\n")
+    design = str(Path(__file__).parent.parent / "examples" / "submarine" / "submarine.rcs")
+    assert main(["doc", design, "-o", str(site)]) == 2
+    assert "refusing to overwrite" in capsys.readouterr().err
+    assert mine.read_text() == "<html><body>my notes</body></html>\n"
+    mine.unlink()
+    assert main(["doc", design, "-o", str(site)]) == 0  # rcsc's own page is replaced freely
+    first = mine.read_bytes()
+    assert main(["doc", design, "-o", str(site)]) == 0
+    assert mine.read_bytes() == first
