@@ -8,6 +8,7 @@ variables, the subordinates' status and the time in state).
 from __future__ import annotations
 
 import math
+import operator
 
 from rcsc import model as m
 from rcsc import numeric
@@ -82,98 +83,134 @@ def _arith(op: str, a, b, t: Type):
     raise ValueError(op)
 
 
-def _compare(op: str, a, b) -> bool:
-    if op == "==":
-        return a == b
-    if op == "!=":
-        return a != b
-    if op == "<":
-        return a < b
-    if op == "<=":
-        return a <= b
-    if op == ">":
-        return a > b
-    if op == ">=":
-        return a >= b
+def eval_expr(e: m.Expr, env: Env = CONST_ENV, fn_args: dict | None = None):
+    """The value of `e`.  Raises NotConstant when `env` cannot supply a read.
+
+    Each expression is compiled once into a Python closure (kept on the node)
+    and the closure is what runs: the simulator evaluates the same guards and
+    jobs every cycle, and a closure avoids re-dispatching on the node types.
+    """
+    return _sub(e)(env, fn_args)
+
+
+def _compile(e: m.Expr):
+    f = _COMPILERS.get(type(e), _c_other)(e)
+    # Kept with the node it belongs to, so that a copied node (whose closure
+    # would still read the original) is recompiled rather than trusted.
+    e.__dict__["_compiled"] = (e, f)
+    return f
+
+
+def _sub(e: m.Expr):
+    entry = e.__dict__.get("_compiled")
+    return entry[1] if entry is not None and entry[0] is e else _compile(e)
+
+
+def _c_const(e):
+    value = e.value
+    return lambda env, a: value
+
+
+def _c_ref(e):
+    if e.kind == "arg":
+        name = e.name
+        return lambda env, a: a[name] if a is not None else env.ref(e)
+    return lambda env, a: env.ref(e)
+
+
+def _c_in_state(e):
+    return lambda env, a: env.in_state(e)
+
+
+def _c_sub_view(e):
+    return lambda env, a: env.sub_view(e)
+
+
+def _c_field(e):
+    obj, name = _sub(e.obj), e.name
+    return lambda env, a: obj(env, a)[name]
+
+
+def _c_unary(e):
+    v = _sub(e.operand)
+    if e.op == "not":
+        return lambda env, a: not v(env, a)
+    if isinstance(e.type, IntType) or e.type == DURATION:
+        t = e.type if isinstance(e.type, IntType) else I64
+        return lambda env, a: numeric.wrap(-v(env, a), t)
+    return lambda env, a: -v(env, a)
+
+
+_COMPARE = {"==": operator.eq, "!=": operator.ne, "<": operator.lt, "<=": operator.le, ">": operator.gt, ">=": operator.ge}
+
+
+def _c_binary(e):
+    op, lf, rf = e.op, _sub(e.left), _sub(e.right)
+    if op == "and":
+        return lambda env, a: bool(lf(env, a)) and bool(rf(env, a))
+    if op == "or":
+        return lambda env, a: bool(lf(env, a)) or bool(rf(env, a))
+    if e.type == BOOL:
+        cmp = _COMPARE[op]
+        return lambda env, a: cmp(lf(env, a), rf(env, a))
+    t = e.type
+    if isinstance(t, IntType) or t == DURATION:
+        it = t if isinstance(t, IntType) else I64
+        wrap = numeric.wrap
+        if op == "+":
+            return lambda env, a: wrap(lf(env, a) + rf(env, a), it)
+        if op == "-":
+            return lambda env, a: wrap(lf(env, a) - rf(env, a), it)
+        if op == "*":
+            return lambda env, a: wrap(lf(env, a) * rf(env, a), it)
+        if op == "/":
+            return lambda env, a: numeric.int_div(lf(env, a), rf(env, a), it)
+        if op == "%":
+            return lambda env, a: numeric.int_rem(lf(env, a), rf(env, a), it)
+    if op == "+":
+        return lambda env, a: lf(env, a) + rf(env, a)
+    if op == "-":
+        return lambda env, a: lf(env, a) - rf(env, a)
+    if op == "*":
+        return lambda env, a: lf(env, a) * rf(env, a)
+    if op == "/":
+        return lambda env, a: numeric.float_div(lf(env, a), rf(env, a))
     raise ValueError(op)
 
 
-def eval_expr(e: m.Expr, env: Env = CONST_ENV, fn_args: dict | None = None):
-    """The value of `e`.  Raises NotConstant when `env` cannot supply a read."""
-    # Dispatch on the node's exact type: this is the simulator's inner loop.
-    return _EVAL.get(type(e), _e_other)(e, env, fn_args)
+def _c_if(e):
+    c, t, f = _sub(e.cond), _sub(e.then), _sub(e.else_)
+    return lambda env, a: t(env, a) if c(env, a) else f(env, a)
 
 
-def _e_const(e, env, fn_args):
-    return e.value
+def _c_call(e):
+    argfs = [_sub(x) for x in e.args]
+    if e.kind == "fn":
+        name = e.func
+
+        def call_fn(env, a):
+            values = [g(env, a) for g in argfs]
+            fn = env.function(name)
+            return _sub(fn.body)(env, {p.name: v for p, v in zip(fn.params, values)})
+
+        return call_fn
+    return lambda env, a: _call(e, [g(env, a) for g in argfs], env)
 
 
-def _e_ref(e, env, fn_args):
-    if e.kind == "arg" and fn_args is not None:
-        return fn_args[e.name]
-    return env.ref(e)
+def _c_other(e):
+    return lambda env, a: env.other(e)
 
 
-def _e_in_state(e, env, fn_args):
-    return env.in_state(e)
-
-
-def _e_sub_view(e, env, fn_args):
-    return env.sub_view(e)
-
-
-def _e_field(e, env, fn_args):
-    return eval_expr(e.obj, env, fn_args)[e.name]
-
-
-def _e_unary(e, env, fn_args):
-    v = eval_expr(e.operand, env, fn_args)
-    if e.op == "not":
-        return not v
-    if isinstance(e.type, IntType):
-        return numeric.wrap(-v, e.type)
-    if e.type == DURATION:
-        return numeric.wrap(-v, I64)
-    return -v
-
-
-def _e_binary(e, env, fn_args):
-    op = e.op
-    if op == "and":
-        return bool(eval_expr(e.left, env, fn_args)) and bool(eval_expr(e.right, env, fn_args))
-    if op == "or":
-        return bool(eval_expr(e.left, env, fn_args)) or bool(eval_expr(e.right, env, fn_args))
-    a = eval_expr(e.left, env, fn_args)
-    b = eval_expr(e.right, env, fn_args)
-    if e.type == BOOL:
-        return _compare(op, a, b)
-    return _arith(op, a, b, e.type)
-
-
-def _e_if(e, env, fn_args):
-    if eval_expr(e.cond, env, fn_args):
-        return eval_expr(e.then, env, fn_args)
-    return eval_expr(e.else_, env, fn_args)
-
-
-def _e_call(e, env, fn_args):
-    return _call(e, [eval_expr(a, env, fn_args) for a in e.args], env)
-
-
-def _e_other(e, env, fn_args):
-    return env.other(e)
-
-
-_EVAL = {
-    m.Const: _e_const,
-    m.Ref: _e_ref,
-    m.InState: _e_in_state,
-    m.SubView: _e_sub_view,
-    m.Field: _e_field,
-    m.Unary: _e_unary,
-    m.Binary: _e_binary,
-    m.IfExpr: _e_if,
-    m.Call: _e_call,
+_COMPILERS = {
+    m.Const: _c_const,
+    m.Ref: _c_ref,
+    m.InState: _c_in_state,
+    m.SubView: _c_sub_view,
+    m.Field: _c_field,
+    m.Unary: _c_unary,
+    m.Binary: _c_binary,
+    m.IfExpr: _c_if,
+    m.Call: _c_call,
 }
 
 

@@ -202,7 +202,8 @@ class Simulator:
         cmd = self.commands[c.name]
         rt.cmd = CommandBuffer(cmd.serial, cmd.verb, clone(cmd.args))
         rt.subs = {u.name: self.statuses[u.name] for u in c.subordinates}  # read-only; replaced, never mutated
-        rt.gm = {u.name: clone(self.gm[u.name]) for u in rt.gm_uses}
+        gm = self.gm  # scalars are immutable: only records (dicts) need a copy
+        rt.gm = {n: (v if type(v) is not dict else clone(v)) for n, v in ((u.name, gm[u.name]) for u in rt.gm_uses)}
         rt.pending = {}
         # 2. Pre.
         self.exec_block(c.pre, rt, env)
@@ -231,7 +232,8 @@ class Simulator:
         st.stamp = self.cycle
         self.statuses[c.name] = _clone_status(st)
         for use in c.writes:
-            self.gm[use.name] = clone(rt.gm[use.name])
+            v = rt.gm[use.name]
+            self.gm[use.name] = v if type(v) is not dict else clone(v)
         for sub, (verb, args) in rt.pending.items():
             serial = next_serial(rt.last_sent[sub])
             rt.last_sent[sub] = serial
