@@ -50,7 +50,7 @@ sys.path.insert(0, str(ROOT))
 
 from rcsc.diagnostics import Diagnostics  # noqa: E402
 from rcsc.driver import check_path  # noqa: E402
-from rcsc.runner import run_scenario  # noqa: E402
+from rcsc.runner import drive, run_scenario  # noqa: E402
 from rcsc.scenario import text_to_scenario  # noqa: E402
 from rcsc.simulate import Simulator  # noqa: E402
 from rcsc.source import SourceFile  # noqa: E402
@@ -103,18 +103,9 @@ def _load(path: str):
 def _bare_steps(design, sc) -> float:
     """The stepping loop alone: inputs and commands applied, no snapshots."""
     sim = Simulator(design)
-    commands = list(sc.commands)
-    inputs = list(sc.inputs)
     t = time.perf_counter()
-    for _ in range(sc.cycles):
-        cycle = sim.begin_cycle()
-        while inputs and inputs[0].cycle == cycle:
-            inp = inputs.pop(0)
-            sim.set_input(inp.var, inp.value)
-        while commands and commands[0].cycle == cycle:
-            cmd = commands.pop(0)
-            sim.operator_command(cmd.ctrl, cmd.verb, cmd.args)
-        sim.run_cycle()
+    for _ in drive(sim, sc):
+        pass
     return time.perf_counter() - t
 
 

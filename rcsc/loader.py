@@ -186,18 +186,7 @@ def _skip_trivia(text: str, i: int) -> int:
 
 def _first_token_span(source: SourceFile) -> Span:
     text = source.text
-    i = 0
-    while i < len(text):
-        if text[i].isspace():
-            i += 1
-        elif text.startswith("//", i):
-            j = text.find("\n", i)
-            i = len(text) if j < 0 else j
-        elif text.startswith("/*", i):
-            j = text.find("*/", i + 2)
-            i = len(text) if j < 0 else j + 2
-        else:
-            break
+    i = _skip_trivia(text, 0)
     j = i
     while j < len(text) and not text[j].isspace():
         j += 1

@@ -489,13 +489,18 @@ class _ToAst(Transformer_NonRecursive):
 
 def text_to_ast(source: SourceFile, diags: Diagnostics) -> ast.File | None:
     """Parse one file.  Returns None (with a diagnostic) on a syntax error."""
-    parser = _parser()
+    return parse_with(_parser(), _ToAst, source, diags)
+
+
+def parse_with(parser: Lark, builder_class: type, source: SourceFile, diags: Diagnostics):
+    """Parse `source` with `parser` and build the result with `builder_class`
+    (a `_ToAst`); None after a syntax error or a too-deep nesting (E0007)."""
     try:
         tree = parser.parse(source.text)
     except UnexpectedInput as exc:
         _syntax_error(parser, source, exc, diags)
         return None
-    builder = _ToAst(source, diags)
+    builder = builder_class(source, diags)
     try:
         result = builder.transform(tree)
     except VisitError as exc:  # pragma: no cover - a bug in the transformer

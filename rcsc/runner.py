@@ -128,11 +128,10 @@ def evaluate_expectation(design: m.Design, x: Expectation, snaps: list[Snapshot]
     return ExpectResult(x, True, snaps[-1].cycle, [])
 
 
-def run_scenario(design: m.Design, sc: Scenario, externs: dict | None = None) -> RunResult:
-    sim = Simulator(design, externs)
+def drive(sim: Simulator, sc: Scenario):
+    """Run `sc`'s cycles on `sim`, yielding after each cycle (inputs and commands applied first)."""
     commands = list(sc.commands)
     inputs = list(sc.inputs)
-    snaps: list[Snapshot] = []
     for _ in range(sc.cycles):
         cycle = sim.begin_cycle()
         while inputs and inputs[0].cycle == cycle:
@@ -142,6 +141,11 @@ def run_scenario(design: m.Design, sc: Scenario, externs: dict | None = None) ->
             cmd = commands.pop(0)
             sim.operator_command(cmd.ctrl, cmd.verb, cmd.args)
         sim.run_cycle()
-        snaps.append(snapshot(sim))
+        yield cycle
+
+
+def run_scenario(design: m.Design, sc: Scenario, externs: dict | None = None) -> RunResult:
+    sim = Simulator(design, externs)
+    snaps = [snapshot(sim) for _ in drive(sim, sc)]
     results = [evaluate_expectation(design, x, snaps) for x in sc.expects]
     return RunResult(sc, snaps, results)

@@ -19,12 +19,11 @@ from functools import lru_cache
 from importlib import resources
 
 from lark import Lark
-from lark.exceptions import UnexpectedInput
 
 from rcsc import ast
 from rcsc import model as m
 from rcsc.diagnostics import Diagnostics
-from rcsc.parse import _syntax_error, _ToAst
+from rcsc.parse import _ToAst, parse_with
 from rcsc.source import SourceFile, Span
 from rcsc.typecheck import Checker, Globals, Scope
 from rcsc.types import BOOL, ERROR, I32, ErrorType, Type
@@ -229,15 +228,8 @@ class _ObserverChecker(Checker):
 
 def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -> Scenario | None:
     """Parse and check one scenario against a checked design."""
-    parser = _parser()
-    try:
-        tree = parser.parse(source.text)
-    except UnexpectedInput as exc:
-        _syntax_error(parser, source, exc, diags)
-        return None
-    builder = _ScenarioAst(source, diags)
-    items = builder.transform(tree)
-    if builder.too_deep:
+    items = parse_with(_parser(), _ScenarioAst, source, diags)
+    if items is None:
         return None
     start = len(diags.errors)
     g = globals_of(design)

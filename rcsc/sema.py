@@ -351,9 +351,9 @@ class _Sema:
         scope = Scope(self.g, controller=c)
         checker = Checker(scope, self.d)
         for _, block in item.pre:
-            c.pre.extend(checker.stmts(block, allow_commands=False))
+            c.pre.extend(checker.stmts(block))
         for _, block in item.post:
-            c.post.extend(checker.stmts(block, allow_commands=False))
+            c.post.extend(checker.stmts(block))
         for plan in item.plans:
             verb_name = plan.name.name
             if verb_name in c.plans:
@@ -401,7 +401,7 @@ class _Sema:
             if nxt.kind == "error" and r.next.code is not None:
                 code = const_checker.constant(r.next.code, I32, "an error code")
                 nxt.code = int(code.value) if code is not None and isinstance(code.value, int) else 0
-            jobs = checker.stmts(r.jobs, allow_commands=True)
+            jobs = checker.stmts(r.jobs)
             rules.append(m.Rule(i, r.label.name, r.span, r.label.span, state, guard, r.guard_span, nxt, jobs))
         ordered = any(mod.name == "ordered" for mod in plan.modifiers)
         return m.Plan(verb.name, plan.span, plan.name.span, plan.continuous, rules, ordered)

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 from rcsc import model as m
 from rcsc.evaluate import Env, _arith, eval_expr
-from rcsc.types import BOOL, DURATION, F64, EnumType, FloatType, IntType, RecordType, Type, U32
+from rcsc.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type, U32
 
 STATUS_NAMES = {m.UNINITIALIZED: "UNINITIALIZED", m.DONE: "DONE", m.EXEC: "EXEC", m.ERROR: "ERROR"}
 SERIAL_MAX = U32.max

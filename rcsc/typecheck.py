@@ -24,7 +24,6 @@ from rcsc.types import (
     F64,
     I32,
     I64,
-    INT_TYPES,
     EnumType,
     ErrorType,
     FloatType,
@@ -504,15 +503,15 @@ class Checker:
 
     # ---- statements ------------------------------------------------------------
 
-    def stmts(self, nodes: list[ast.Stmt], allow_commands: bool) -> list[m.Stmt]:
+    def stmts(self, nodes: list[ast.Stmt]) -> list[m.Stmt]:
         out = []
         for n in nodes:
-            s = self.stmt(n, allow_commands)
+            s = self.stmt(n)
             if s is not None:
                 out.append(s)
         return out
 
-    def stmt(self, node: ast.Stmt, allow_commands: bool) -> m.Stmt | None:
+    def stmt(self, node: ast.Stmt) -> m.Stmt | None:
         if isinstance(node, ast.Assign):
             return self.assign(node)
         if isinstance(node, ast.CallStmt):
@@ -531,8 +530,8 @@ class Checker:
                 return None
             return m.Report(node.span, node.status.name)
         if isinstance(node, ast.If):
-            branches = [(self.condition(cond), self.stmts(body, allow_commands)) for cond, body in node.branches]
-            return m.If(node.span, branches, self.stmts(node.else_body or [], allow_commands))
+            branches = [(self.condition(cond), self.stmts(body)) for cond, body in node.branches]
+            return m.If(node.span, branches, self.stmts(node.else_body or []))
         raise TypeError(type(node).__name__)
 
     def lvalue(self, target: list[ast.Ident]) -> m.LValue | None:

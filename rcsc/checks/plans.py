@@ -106,7 +106,7 @@ def _check_plan(c: m.Controller, plan: m.Plan, diags: Diagnostics) -> None:
         )
     if not any(r.state.kind in ("new", "any") for r in rules):
         diags.add("E0511", plan.name_span, f"plan `{plan.verb}` has no rule for `new`", "never leaves `new`").with_help(
-            f"add an entry rule: `E0: true | new -> S1 | ...;`"
+            "add an entry rule: `E0: true | new -> S1 | ...;`"
         )
         return
 
