@@ -352,6 +352,14 @@ The reference simulator (`rcsc sim`, `rcsc test`) steps one CPU's schedule. A
 design with several CPUs is checked, but simulating the buffer exchange between
 CPUs is not implemented yet.
 """),
+    # ---- code generation ----------------------------------------------------
+    ("E0800", _E, "the target cannot build a design with several CPUs", """
+`rcsc build` generates one Main Program per CPU, but the buffers that
+controllers on different CPUs share would need a transport (shared memory,
+a network) to travel between them, and no target has one yet. Rather than
+emit code that silently loses those buffers, the build is refused. Put the
+design on one CPU to build it, or check it with `rcsc check` meanwhile.
+"""),
     # ---- scenarios ----------------------------------------------------------
     ("E0700", _E, "operator command to a controller below the top", """
 Operator commands enter at the top of the hierarchy only (chain of command,

@@ -16,7 +16,9 @@ scenarios); the annotations of every `.rcs` and `.scn` file in the folder
 count.  Every `*.scn` file of a folder is checked as a scenario of the design
 (`rcsc.scenario.text_to_scenario`), except `sim.scn`, which is run with
 `rcsc sim` when the design has no errors (for the findings only that command
-reports; they are read from its human-readable output).  Cases named `ok_*`
+reports; they are read from its human-readable output), and except folders
+with a file `build-target` (holding a target name), where `rcsc build
+--target NAME` runs and its findings count too.  Cases named `ok_*`
 are clean designs and carry no annotations.
 """
 
@@ -145,10 +147,29 @@ def _sim_findings(root: Path, ok: bool) -> Counter:
     )
 
 
+BUILD_TARGET = "build-target"
+
+
+def _build_findings(root: Path, ok: bool, tmp: Path) -> Counter:
+    """Findings of `rcsc build DESIGN --target T` for a folder with a `build-target` file."""
+    marker = root.parent / BUILD_TARGET
+    if root.parent == CASES or not marker.is_file() or not ok:
+        return Counter()
+    from rcsc import cli
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        cli.main(["build", str(root), "--target", marker.read_text().strip(), "-o", str(tmp / "out")])
+    return Counter(
+        (os.path.realpath(path), code, int(line), int(col)) for code, path, line, col in _RENDERED.findall(err.getvalue())
+    )
+
+
 @pytest.mark.parametrize("root", ROOTS, ids=[_case_id(r) for r in ROOTS])
-def test_case(root: Path) -> None:
+def test_case(root: Path, tmp_path: Path) -> None:
     result = _check(root)
-    expected, found = _expected(root), _found(result, _sim_findings(root, result.ok))
+    expected = _expected(root)
+    found = _found(result, _sim_findings(root, result.ok) + _build_findings(root, result.ok, tmp_path))
     missing, extra = expected - found, found - expected
     if missing or extra:
         details = "\n".join(

@@ -1,0 +1,246 @@
+"""The C target: C99 controllers (Appendix A) and a POSIX Main Program (Appendix B).
+
+`CBackend.files()` lays the design out as files; the text of expressions and
+statements comes from `target.CTarget`, the Main Program's tables from
+`tables.py`, and the design-independent runtime (rcs_num.h, rcs_runtime.h/.c)
+is copied from runtime/.  See docs/backends.md.
+"""
+
+from __future__ import annotations
+
+from rcsc import model as m
+from rcsc.backend import (
+    CtrlInfo,
+    OutFile,
+    built_controllers,
+    register,
+    schedule_of,
+    where,
+)
+from rcsc.backends.c.tables import main_tables
+from rcsc.backends.c.target import CTarget, c_comment
+from rcsc.types import EnumType, RecordType, Type
+
+RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c")
+
+
+def ordered_types(design: m.Design) -> list[Type]:
+    """Enums, then records with every record after the records it contains."""
+    out: list[Type] = list(design.enums.values())
+    done: set[str] = set()
+
+    def visit(t: RecordType) -> None:
+        if t.name in done:
+            return
+        done.add(t.name)
+        for _, ft in t.fields:
+            if isinstance(ft, RecordType):
+                visit(ft)
+        out.append(t)
+
+    for t in design.records.values():
+        visit(t)  # type: ignore[arg-type]
+    return out
+
+
+@register
+class CBackend(CTarget):
+    def files(self) -> list[OutFile]:
+        d, p = self.design, self.p
+        ctrls = built_controllers(d, self.options)
+        files = [OutFile(name, self.runtime_file(name)) for name in RUNTIME_FILES]
+        files.append(OutFile(f"{p}.h", self.render("design.h.j2", **self.design_header(ctrls))))
+        files.append(OutFile(f"{p}.c", self.render("design.c.j2", **self.design_source(ctrls))))
+        externs = [f for f in d.functions.values() if f.extern]
+        files.append(OutFile(f"{p}_externs.h", self.render("externs.h.j2", p=p, protos=[self.prototype(f) + ";" for f in externs])))
+        if externs:
+            files.append(OutFile(f"{p}_externs.c", self.render("externs_stub.c.j2", p=p, fns=[self.extern_stub(f) for f in externs]), user=True))
+        for c in ctrls:
+            ctx = self.controller(c)
+            files.append(OutFile(f"{p}_{c.name}.h", self.render("ctrl.h.j2", **ctx)))
+            files.append(OutFile(f"{p}_{c.name}.c", self.render("ctrl.c.j2", **ctx)))
+        deploy = self.options.exclude_simulators
+        if deploy:
+            files.append(OutFile(f"{p}_io.h", self.render("io.h.j2", p=p)))
+            files.append(OutFile(f"{p}_io.c", self.render("io_stub.c.j2", p=p), user=True))
+        binaries = []
+        for cpu in d.cpus.values():
+            tables = main_tables(self, cpu, schedule_of(d, cpu, self.options), ctrls)
+            files.append(OutFile(f"main_{cpu.name}.c", self.render("main.c.j2", p=p, cpu=cpu.name, deploy=deploy, ctrls=[c.name for c in ctrls], **tables)))
+            binaries.append({"name": f"{p}_{cpu.name}", "main": f"main_{cpu.name}.c"})
+        sources = [f"{p}.c"] + [f"{p}_{c.name}.c" for c in ctrls] + ([f"{p}_externs.c"] if externs else []) + ([f"{p}_io.c"] if deploy else []) + ["rcs_runtime.c"]
+        build = {"p": p, "sources": sources, "binaries": binaries}
+        files.append(OutFile("Makefile", self.render("Makefile.j2", **build)))
+        files.append(OutFile("CMakeLists.txt", self.render("CMakeLists.txt.j2", **build)))
+        return files
+
+    # ---- the design header -------------------------------------------------------------
+
+    def design_header(self, ctrls: list[m.Controller]) -> dict:
+        d, p = self.design, self.p
+        types = []
+        for t in ordered_types(d):
+            if isinstance(t, EnumType):
+                types.append({"kind": "enum", "name": self.ctype(t), "members": [self.member(t, x) for x in t.members]})
+            else:
+                assert isinstance(t, RecordType)
+                types.append({"kind": "record", "name": self.ctype(t), "fields": [f"{self.ctype(ft)} {self.ident(n)};" for n, ft in t.fields]})
+        consts = [{"name": f"{p}_{k.name}", "value": self.literal(k.value, k.type), "where": where(k.span)} for k in d.consts.values()]
+        gm = [f"{self.ctype(v.type)} {self.ident(v.name)};" for v in d.gm.values()]
+        buffers = []
+        for c in ctrls:
+            info = self.infos[c.name]
+            verbs = []
+            for i, (vname, v) in enumerate(c.verbs.items(), 1):
+                verbs.append({"macro": f"{p}_{c.name}_VERB_{vname}", "number": i, "member": self.ident(vname),
+                              "args_type": f"{p}_{c.name}_{vname}_args",
+                              "params": [f"{self.ctype(q.type)} {self.ident(q.name)};" for q in v.params]})
+            buffers.append({
+                "name": c.name, "member": self.ident(c.name),
+                "verbs": verbs, "with_args": [v for v in verbs if v["params"]],
+                "statuses": [{"macro": f"{p}_{c.name}_STATUS_{s}", "number": n} for s, n in c.statuses.items()],
+                "cmd_type": f"{p}_{c.name}_cmd", "status_type": f"{p}_{c.name}_status", "args_type": f"{p}_{c.name}_args",
+                "fields_type": f"{p}_{c.name}_fields",
+                "fields": [f"{self.ctype(v.type)} {self.ident(v.name)};" for v in c.status_fields.values()],
+                "n_rules": len(info.rules),
+            })
+        fns = [f for f in d.functions.values() if not f.extern]
+        return {
+            "p": p, "design": d.name,
+            "periods": [{"macro": self.period_macro(c.name), "ns": c.heartbeat_ns} for c in d.cpus.values()],
+            "types": types, "consts": consts, "gm": gm, "buffers": buffers,
+            "protos": [f"static inline {self.prototype(f)};" for f in fns],
+            "fns": [self.function(f) for f in fns],
+        }
+
+    def prototype(self, f: m.Function) -> str:
+        params = ", ".join(f"{self.ctype(q.type)} {self.ident(q.name)}" for q in f.params) or "void"
+        return f"{self.ctype(f.ret)} {self.p}_{f.name}({params})"
+
+    def function(self, f: m.Function) -> dict:
+        assert f.body is not None
+        used = {e.name for e in m.walk_expr(f.body) if isinstance(e, m.Ref) and e.kind == "arg"}
+        return {
+            "proto": f"static inline {self.prototype(f)}",
+            "where": where(f.span),
+            "unused": [self.ident(q.name) for q in f.params if q.name not in used],
+            "body": self.expr(f.body),
+        }
+
+    def extern_stub(self, f: m.Function) -> dict:
+        return {"proto": self.prototype(f), "where": where(f.span), "params": [self.ident(q.name) for q in f.params],
+                "zero": self.literal(self.zero(f.ret), f.ret)}
+
+    def design_source(self, ctrls: list[m.Controller]) -> dict:
+        d = self.design
+        gm = [f"b->gm.{self.ident(n)} = {self.literal(v.init if v.init is not None else self.zero(v.type), v.type)};" for n, v in d.gm.items()]
+        inits = []
+        for c in ctrls:
+            member = self.ident(c.name)
+            lines = [f"b->{member}_cmd.head.serial = 0u;", f"b->{member}_cmd.head.verb = 0;"]
+            lines += [f"b->{member}_status.head.{k} = {v};" for k, v in _HEAD_INIT]
+            lines += [f"b->{member}_status.f.{self.ident(n)} = {self.init_value(v)};" for n, v in c.status_fields.items()]
+            inits.append(lines)
+        return {"p": self.p, "gm": gm, "ctrls": inits}
+
+    def init_value(self, v: m.Var) -> str:
+        return self.literal(v.init if v.init is not None else self.zero(v.type), v.type)
+
+    # ---- one controller -----------------------------------------------------------------
+
+    def controller(self, c: m.Controller) -> dict:
+        p = self.p
+        info = self.infos[c.name]
+        self.info, self.verb = info, None
+        subs = [{"name": s, "member": self.ident(s), "status_type": f"{p}_{s}_status", "cmd_type": f"{p}_{s}_cmd"} for s in info.subs]
+        gm = [{"decl": f"{self.ctype(self.design.gm[n].type)} {self.ident(n)};", "member": self.ident(n)} for n in info.gm_uses]
+        writes = [self.ident(u.name) for u in c.writes]
+        locals_ = [f"{self.ctype(v.type)} {self.ident(v.name)};" for v in c.locals.values()]
+        init = [f"self->status.head.{k} = {v};" for k, v in _HEAD_INIT]
+        init += [f"self->status.f.{self.ident(n)} = {self.init_value(v)};" for n, v in c.status_fields.items()]
+        init += [f"self->loc.{self.ident(n)} = {self.init_value(v)};" for n, v in c.locals.items()]
+        for s in subs:
+            init += [f"self->sent.{s['member']} = 0u;", f"self->send.{s['member']} = false;"]
+        plans = [self.plan(c, plan) for plan in c.plans.values()]
+        self.verb = None
+        ctx = {
+            "p": p, "name": c.name, "type": self.ctrl_type(c.name), "member": self.ident(c.name),
+            "kind": "simulator" if c.simulator else "controller", "level": c.level, "where": where(c.span),
+            "budget_ns": c.budget_ns,
+            "cmd_type": f"{p}_{c.name}_cmd", "status_type": f"{p}_{c.name}_status",
+            "has_fields": bool(c.status_fields),
+            "subs": subs, "gm": gm, "writes": writes, "locals": locals_, "init": init,
+            "states": [{"name": _state_enum(s), "number": i, "text": s or "(none)"} for i, s in enumerate(info.states)],
+            "rules": [{"name": f"RULE_{plan.verb}_{r.label}", "number": info.rule_number[(plan.verb, r.index)]} for plan in c.plans.values() for r in plan.rules],
+            "plans": plans,
+            "plan_verbs": [f"{p}_{c.name}_VERB_{plan.verb}" for plan in c.plans.values()],
+            "pre": self.stmts(c.pre, 1), "post": self.stmts(c.post, 1),
+        }
+        self.info = None
+        return ctx
+
+    def plan(self, c: m.Controller, plan: m.Plan) -> dict:
+        info = self.infos[c.name]
+        self.verb = plan.verb
+        guarded = [r for r in plan.rules if not r.otherwise]
+        fallbacks = [r for r in plan.rules if r.otherwise and r.state.kind != "any"]
+        rules = [self.rule(info, plan, r) for r in guarded + fallbacks]
+        return {
+            "fn": f"plan_{plan.verb}",
+            "verb": plan.verb,
+            "where": where(plan.span),
+            "continuous": plan.continuous,
+            "needs_state": any(r.state.kind != "any" for r in plan.rules),
+            "rules": rules,
+        }
+
+    def rule(self, info: CtrlInfo, plan: m.Plan, r: m.Rule) -> dict:
+        tests = []
+        if r.state.kind == "new":
+            tests.append("state == ST_NEW")
+        elif r.state.kind == "named":
+            tests.append(f"state == {_state_enum(r.state.name or '')}")
+        if r.guard is not None and not (isinstance(r.guard, m.Const) and r.guard.value is True):
+            guard = self.expr(r.guard)
+            tests.append(guard)
+        cond = " && ".join(tests)
+        guard_text = "otherwise" if r.guard is None else c_comment(r.guard_span.text)
+        body = [f"self->status.head.status = RCS_EXEC;", f"self->status.head.rule = RULE_{plan.verb}_{r.label};"]
+        body += self.stmts(r.jobs, 0)
+        nxt = r.next
+        if nxt.kind == "named":
+            target = _state_enum(nxt.name or "")
+            enter = [f"self->status.head.state = {target};", "self->entry_cycle = cycle;"]
+            if r.state.kind == "named" and r.state.name == nxt.name:
+                pass  # a self-loop keeps the time in state running
+            elif r.state.kind == "any":
+                body.append(f"if (self->status.head.state != {target}) {{")
+                body += ["    " + x for x in enter]
+                body.append("}")
+            else:
+                body += enter
+        elif nxt.kind == "done":
+            body += ["self->status.head.status = RCS_DONE;", "self->status.head.state = ST_DONE;", "self->idle = true;"]
+        elif nxt.kind == "error":
+            body += ["self->status.head.status = RCS_ERROR;", f"self->status.head.error_code = {nxt.code};",
+                     "self->status.head.state = ST_ERROR;", "self->idle = true;"]
+        return {
+            "comment": f"{r.label} ({where(r.span)}): {guard_text} | {r.state} -> {nxt}",
+            "cond": cond,
+            "body": body,
+        }
+
+
+_HEAD_INIT = [
+    ("echo_serial", "0u"),
+    ("status", "RCS_UNINITIALIZED"),
+    ("verb", "0"),
+    ("state", "0"),
+    ("rule", "0"),
+    ("error_code", "0"),
+    ("stamp", "0u"),
+]
+
+def _state_enum(name: str) -> str:
+    """File-local enumerator of a state: fixed states ST_*, named states S_<name>."""
+    return {"": "ST_NONE", "new": "ST_NEW", "done": "ST_DONE", "error": "ST_ERROR"}.get(name, f"S_{name}")

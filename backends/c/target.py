@@ -1,0 +1,281 @@
+"""The C target: type table, expressions and statements (`<node>_expr`, `<node>_stmt`).
+
+Naming in the generated C (docs/backends.md): every design-wide identifier
+carries the design name as a prefix (`submarine_ShipDir`, `submarine_PR_step`)
+so that two designs link into one program and nothing clashes with libc;
+struct members keep the design's names (a C keyword gets a trailing `_`).
+Inside a controller's .c, states and rules are file-local enumerators
+(`ST_S1`, `RULE_AHEAD_E0`).
+
+Numbers follow DESIGN.md section 3 without undefined behaviour: integer
+arithmetic goes through the helpers of rcs_num.h (wrapping in the unsigned
+type), f64 arithmetic is plain C (built with -ffp-contract=off).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+from rcsc import model as m
+from rcsc.backend import BuildOptions, CtrlInfo, Target, lower_controller
+from rcsc.types import BOOL, DURATION, F64, I32, I64, U32, EnumType, FloatType, IntType, RecordType, Type
+
+C_KEYWORDS = frozenset(
+    "auto break case char const continue default do double else enum extern float for goto if inline int long "
+    "register restrict return short signed sizeof static struct switch typedef union unsigned void volatile while "
+    "_Bool _Complex _Imaginary bool true false self cycle buf state main".split()
+)
+
+# Suffix of the rcs_num.h helper for each integer type.
+INT_SUFFIX = {"i32": "i32", "i64": "i64", "u32": "u32", "duration": "i64"}
+ARITH = {"+": "add", "-": "sub", "*": "mul", "/": "div", "%": "rem"}
+
+
+def c_comment(text: str) -> str:
+    """Text that is safe inside /* ... */ and on one line."""
+    return re.sub(r"\s+", " ", text.replace("*/", "* /")).strip()
+
+
+def c_string(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+class CTarget(Target):
+    name = "c"
+    summary = "C99 controllers (freestanding) and a POSIX Main Program per CPU"
+    package = "rcsc.backends.c"
+
+    def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
+        super().__init__(design, options)
+        self.p = self.ident(design.name)
+        # Context of the code being emitted: the controller and the verb whose plan it is.
+        self.info: CtrlInfo | None = None
+        self.verb: str | None = None
+        self.infos = {name: lower_controller(c) for name, c in design.controllers.items()}
+
+    # ---- names and types ---------------------------------------------------------
+
+    @staticmethod
+    def ident(name: str) -> str:
+        return name + "_" if name in C_KEYWORDS else name
+
+    def ctype(self, t: Type) -> str:
+        if t == BOOL:
+            return "bool"
+        if t == DURATION:
+            return "int64_t"
+        if isinstance(t, IntType):
+            return {"i32": "int32_t", "i64": "int64_t", "u32": "uint32_t"}[t.name]
+        if isinstance(t, FloatType):
+            return "double"
+        if isinstance(t, (EnumType, RecordType)):
+            return f"{self.p}_{t.name}"
+        raise ValueError(f"no C type for {t}")
+
+    def member(self, t: EnumType, name: str) -> str:
+        return f"{self.p}_{t.name}_{name}"
+
+    def ctrl_type(self, c: str) -> str:
+        return f"{self.p}_{c}"
+
+    def period_macro(self, cpu: str) -> str:
+        return f"{self.p}_{cpu}_PERIOD_NS"
+
+    # ---- values --------------------------------------------------------------------
+
+    def literal(self, value, t: Type, braces: bool = False) -> str:
+        """A constant value of type `t`.  `braces`: as a static initializer (records as `{...}`)."""
+        if t == BOOL:
+            return "true" if value else "false"
+        if t == DURATION or t == I64:
+            v = int(value)
+            return "INT64_MIN" if v == I64.min else (f"INT64_C({v})" if v >= 0 else f"(-INT64_C({-v}))")
+        if t == I32:
+            v = int(value)
+            return "INT32_MIN" if v == I32.min else (str(v) if v >= 0 else f"(-{-v})")
+        if t == U32:
+            return f"{int(value)}u"
+        if isinstance(t, FloatType):
+            x = float(value)
+            if math.isnan(x):
+                return "RCS_NAN"
+            if math.isinf(x):
+                return "RCS_INF" if x > 0 else "(-RCS_INF)"
+            text = repr(abs(x))
+            if "." not in text and "e" not in text:
+                text += ".0"
+            return f"(-{text})" if math.copysign(1.0, x) < 0 else text
+        if isinstance(t, EnumType):
+            return self.member(t, str(value))
+        if isinstance(t, RecordType):
+            inner = ", ".join(self.literal(value[n], ft, braces) for n, ft in t.fields)
+            return "{" + inner + "}" if braces else f"(({self.ctype(t)}){{{inner}}})"
+        raise ValueError(f"no C literal for {t}")
+
+    def zero(self, t: Type):
+        if t == BOOL:
+            return False
+        if isinstance(t, FloatType):
+            return 0.0
+        if isinstance(t, EnumType):
+            return t.members[0]
+        if isinstance(t, RecordType):
+            return {n: self.zero(ft) for n, ft in t.fields}
+        return 0
+
+    # ---- expressions ---------------------------------------------------------------
+
+    def const_expr(self, e: m.Const) -> str:
+        if e.name is not None and e.name in self.design.consts:
+            return f"{self.p}_{e.name}"
+        return self.literal(e.value, e.type)
+
+    def ref_expr(self, e: m.Ref) -> str:
+        name = self.ident(e.name)
+        if e.kind == "gm":
+            return f"self->gm.{name}"
+        if e.kind == "local":
+            return f"self->loc.{name}"
+        if e.kind == "status":
+            return f"self->status.f.{name}"
+        if e.kind == "param":
+            assert self.verb is not None, "a command parameter outside a plan"
+            return f"self->cmd.args.{self.ident(self.verb)}.{name}"
+        return name  # a function's parameter
+
+    def instate_expr(self, e: m.InState) -> str:
+        assert self.info is not None
+        return f"rcs_cycles_ns(cycle, self->entry_cycle, {self.period_macro(self.info.c.cpu or '')})"
+
+    def subview_expr(self, e: m.SubView) -> str:
+        assert self.info is not None
+        sub = self.ident(e.sub)
+        head, sent = f"&self->sub.{sub}.head", f"self->sent.{sub}"
+        if e.attr in ("done", "error", "executing"):
+            return f"rcs_sub_{e.attr}({head}, {sent})"
+        if e.attr == "status":
+            return f"rcs_sub_status({head}, {sent}, {self.p}_{e.sub}_STATUS_{e.value})"
+        if e.attr == "error_code":
+            return f"self->sub.{sub}.head.error_code"
+        if e.attr == "age":
+            return f"rcs_cycles_ns(cycle, self->sub.{sub}.head.stamp, {self.period_macro(self.info.c.cpu or '')})"
+        if e.attr == "field":
+            return f"self->sub.{sub}.f.{self.ident(e.value or '')}"
+        raise ValueError(e.attr)
+
+    def field_expr(self, e: m.Field) -> str:
+        obj = self.expr(e.obj)
+        if not isinstance(e.obj, (m.Ref, m.Field, m.SubView)):
+            obj = f"({obj})"
+        return f"{obj}.{self.ident(e.name)}"
+
+    def unary_expr(self, e: m.Unary) -> str:
+        v = self.expr(e.operand)
+        if e.op == "not":
+            return f"(!{v})"
+        if e.type.name in INT_SUFFIX:
+            return f"rcs_neg_{INT_SUFFIX[e.type.name]}({v})"
+        return f"(-{v})"
+
+    def binary_expr(self, e: m.Binary) -> str:
+        a, b = self.expr(e.left), self.expr(e.right)
+        if e.op in ("and", "or"):
+            return f"({a} {'&&' if e.op == 'and' else '||'} {b})"
+        if e.type == BOOL:
+            return f"({a} {e.op} {b})"
+        if e.type.name in INT_SUFFIX:
+            return f"rcs_{ARITH[e.op]}_{INT_SUFFIX[e.type.name]}({a}, {b})"
+        return f"({a} {e.op} {b})"
+
+    def ifexpr_expr(self, e: m.IfExpr) -> str:
+        return f"({self.expr(e.cond)} ? {self.expr(e.then)} : {self.expr(e.else_)})"
+
+    def call_expr(self, e: m.Call) -> str:
+        args = [self.expr(a) for a in e.args]
+        if e.kind in ("fn", "extern"):
+            return f"{self.p}_{e.func}({', '.join(args)})"
+        if e.kind == "record":
+            return f"(({self.ctype(e.type)}){{{', '.join(args)}}})"
+        if e.kind == "convert":
+            return self._convert(args[0], e.args[0].type, e.type)
+        if e.func == "seconds":
+            return f"((double){args[0]} / 1e9)"
+        suffix = "f64" if isinstance(e.type, FloatType) else INT_SUFFIX[e.type.name]
+        if e.func == "abs":
+            return f"rcs_fabs({args[0]})" if suffix == "f64" else f"rcs_abs_{suffix}({args[0]})"
+        return f"rcs_{e.func}_{suffix}({', '.join(args)})"
+
+    def _convert(self, v: str, src: Type, dst: Type) -> str:
+        s = "i64" if src == DURATION else src.name
+        d = dst.name
+        if s == d:
+            return v
+        if d == "f64":
+            return f"((double){v})"
+        if s == "f64":
+            return f"rcs_f64_to_{d}({v})"
+        return f"rcs_{s}_to_{d}({v})"
+
+    # ---- statements ----------------------------------------------------------------
+
+    def lvalue(self, lv: m.LValue) -> str:
+        base = {"gm": "self->gm", "local": "self->loc", "status": "self->status.f"}[lv.kind]
+        return ".".join([base, self.ident(lv.name)] + [self.ident(p) for p in lv.path])
+
+    def assign_stmt(self, s: m.Assign, indent: int) -> list[str]:
+        pad = "    " * indent
+        target = self.lvalue(s.target)
+        value = self.expr(s.value)
+        if s.op == "=":
+            return [f"{pad}{target} = {value};"]
+        op = s.op[0]
+        t = s.target.type
+        if t.name in INT_SUFFIX:
+            return [f"{pad}{target} = rcs_{ARITH[op]}_{INT_SUFFIX[t.name]}({target}, {value});"]
+        return [f"{pad}{target} = {target} {op} {value};"]
+
+    def callstmt_stmt(self, s: m.CallStmt, indent: int) -> list[str]:
+        return ["    " * indent + f"(void){self.expr(s.call)};"]
+
+    def command_stmt(self, s: m.Command, indent: int) -> list[str]:
+        pad = "    " * indent
+        sub = self.ident(s.sub)
+        verb = self.design.controllers[s.sub].verbs[s.verb]
+        out = [f"{pad}self->out.{sub}.head.verb = {self.p}_{s.sub}_VERB_{s.verb};"]
+        for p, a in zip(verb.params, s.args):
+            out.append(f"{pad}self->out.{sub}.args.{self.ident(s.verb)}.{self.ident(p.name)} = {self.expr(a)};")
+        out.append(f"{pad}self->send.{sub} = true;")
+        return out
+
+    def report_stmt(self, s: m.Report, indent: int) -> list[str]:
+        assert self.info is not None
+        return ["    " * indent + f"self->status.head.status = {self.p}_{self.info.c.name}_STATUS_{s.status};"]
+
+    def if_stmt(self, s: m.If, indent: int) -> list[str]:
+        pad = "    " * indent
+        out = []
+        for i, (cond, body) in enumerate(s.branches):
+            head = "if" if i == 0 else "} else if"
+            out.append(f"{pad}{head} ({_strip_parens(self.expr(cond))}) {{")
+            out.extend(self.stmts(body, indent + 1))
+        if s.else_body:
+            out.append(f"{pad}}} else {{")
+            out.extend(self.stmts(s.else_body, indent + 1))
+        out.append(f"{pad}}}")
+        return out
+
+
+def _strip_parens(text: str) -> str:
+    """`(a && b)` -> `a && b` when the outer parentheses enclose the whole text."""
+    if not (text.startswith("(") and text.endswith(")")):
+        return text
+    depth = 0
+    for i, ch in enumerate(text):
+        if ch == "(":
+            depth += 1
+        elif ch == ")":
+            depth -= 1
+            if depth == 0 and i != len(text) - 1:
+                return text
+    return text[1:-1]
