@@ -231,7 +231,7 @@ class WriteResult:
 def _is_generated(path: str) -> bool:
     with open(path, "rb") as f:
         head = f.read(BANNER_WINDOW)
-    return BANNER.encode() in head
+    return BANNER.encode() in head.lower()
 
 
 def write_files(files: list[OutFile], out_dir: str) -> WriteResult:

@@ -228,10 +228,12 @@ class _ObserverChecker(Checker):
 
 def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -> Scenario | None:
     """Parse and check one scenario against a checked design."""
+    # Counted before parsing: a finding of the parser that still yields items
+    # (a duration finer than 1 ns, E0210) must also stop the scenario.
+    start = len(diags.errors)
     items = parse_with(_parser(), _ScenarioAst, source, diags)
     if items is None:
         return None
-    start = len(diags.errors)
     g = globals_of(design)
     const_checker = Checker(Scope(g, const_only=True), diags)
     observer = _ObserverChecker(design, g, diags)

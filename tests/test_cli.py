@@ -284,3 +284,14 @@ def test_unencodable_report_is_replaced_not_fatal(monkeypatch) -> None:
     cli._write(stream, "caf\u00e9 \u65e5\n")
     stream.flush()
     assert stream.buffer.getvalue() == b"caf? ?\n"
+
+
+def test_sim_refuses_a_scenario_whose_duration_is_finer_than_a_nanosecond(tmp_path: Path, capsys) -> None:
+    """A parse-time finding in a scenario (E0210) stops the run, as any other error does."""
+    scn = tmp_path / "fine.scn"
+    scn.write_text("cycles 5\nat 1: SM.TRANSIT(speed = 1.0, leg_time = 0.0000000001 s)\n", encoding="utf-8")
+    design = Path(__file__).resolve().parent.parent / "examples/submarine/submarine.rcs"
+    rc = cli.main(["sim", str(design), "--scenario", str(scn), "-o", str(tmp_path / "t.jsonl")])
+    assert rc == 1
+    assert "error[E0210]" in capsys.readouterr().err
+    assert not (tmp_path / "t.jsonl").exists()

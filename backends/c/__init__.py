@@ -18,7 +18,7 @@ from rcsc.backend import (
     where,
 )
 from rcsc.backends.c.tables import main_tables
-from rcsc.backends.c.target import CTarget, c_comment
+from rcsc.backends.c.target import CTarget, _strip_parens, c_comment
 from rcsc.types import EnumType, RecordType, Type
 
 RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c")
@@ -152,83 +152,164 @@ class CBackend(CTarget):
         p = self.p
         info = self.infos[c.name]
         self.info, self.verb = info, None
-        subs = [{"name": s, "member": self.ident(s), "status_type": f"{p}_{s}_status", "cmd_type": f"{p}_{s}_cmd"} for s in info.subs]
-        gm = [{"decl": f"{self.ctype(self.design.gm[n].type)} {self.ident(n)};", "member": self.ident(n)} for n in info.gm_uses]
-        writes = [self.ident(u.name) for u in c.writes]
+        member = self.ident(c.name)
+        subs = [self.ident(s) for s in info.subs]
         locals_ = [f"{self.ctype(v.type)} {self.ident(v.name)};" for v in c.locals.values()]
-        init = [f"self->status.head.{k} = {v};" for k, v in _HEAD_INIT]
-        init += [f"self->status.f.{self.ident(n)} = {self.init_value(v)};" for n, v in c.status_fields.items()]
-        init += [f"self->loc.{self.ident(n)} = {self.init_value(v)};" for n, v in c.locals.items()]
+        init = [f"self->loc.{self.ident(n)} = {self.init_value(v)};" for n, v in c.locals.items()]
         for s in subs:
-            init += [f"self->sent.{s['member']} = 0u;", f"self->send.{s['member']} = false;"]
+            init += [f"self->sent.{s} = 0u;", f"self->send.{s} = false;"]
         plans = [self.plan(c, plan) for plan in c.plans.values()]
         self.verb = None
         ctx = {
-            "p": p, "name": c.name, "type": self.ctrl_type(c.name), "member": self.ident(c.name),
+            "p": p, "name": c.name, "type": self.ctrl_type(c.name), "member": member,
+            "own": f"buf->{member}_status", "cmd": f"buf->{member}_cmd",
             "kind": "simulator" if c.simulator else "controller", "level": c.level, "where": where(c.span),
             "budget_ns": c.budget_ns,
-            "cmd_type": f"{p}_{c.name}_cmd", "status_type": f"{p}_{c.name}_status",
-            "has_fields": bool(c.status_fields),
-            "subs": subs, "gm": gm, "writes": writes, "locals": locals_, "init": init,
-            "states": [{"name": _state_enum(s), "number": i, "text": s or "(none)"} for i, s in enumerate(info.states)],
+            "subs": subs, "locals": locals_, "init": init,
+            "states": [{"name": _state_enum(s), "number": i} for i, s in enumerate(info.states)],
             "rules": [{"name": f"RULE_{plan.verb}_{r.label}", "number": info.rule_number[(plan.verb, r.index)]} for plan in c.plans.values() for r in plan.rules],
             "plans": plans,
-            "plan_verbs": [f"{p}_{c.name}_VERB_{plan.verb}" for plan in c.plans.values()],
             "pre": self.stmts(c.pre, 1), "post": self.stmts(c.post, 1),
         }
         self.info = None
         return ctx
 
     def plan(self, c: m.Controller, plan: m.Plan) -> dict:
-        info = self.infos[c.name]
         self.verb = plan.verb
-        guarded = [r for r in plan.rules if not r.otherwise]
-        fallbacks = [r for r in plan.rules if r.otherwise and r.state.kind != "any"]
-        rules = [self.rule(info, plan, r) for r in guarded + fallbacks]
+        # First match wins: guarded rules in order, then the state's `otherwise`.
+        rules = [r for r in plan.rules if not r.otherwise] + [r for r in plan.rules if r.otherwise and r.state.kind != "any"]
+        items = [(self.state_test(r), self.conjuncts(r), r) for r in rules]
+        body: list[str] = []
+        i = 0
+        while i < len(items):
+            # Consecutive rules of one state test the state once.
+            j = i + 1
+            while j < len(items) and items[i][0] is not None and items[j][0] == items[i][0]:
+                j += 1
+            group = items[i:j]
+            if len(group) > 1:
+                body.append(f"if ({group[0][0]}) {{")
+                body += ["    " + x for x in self.rule_group(plan, [(conj, r) for _, conj, r in group])]
+                body.append("}")
+            else:
+                test, conj, r = group[0]
+                body += self.rule_group(plan, [(([test] if test else []) + conj, r)])
+            i = j
         return {
-            "fn": f"plan_{plan.verb}",
+            "fn": f"{c.name}_plan_{plan.verb}",
             "verb": plan.verb,
             "where": where(plan.span),
             "continuous": plan.continuous,
-            "needs_state": any(r.state.kind != "any" for r in plan.rules),
-            "rules": rules,
+            "needs_state": any(t is not None for t, _, _ in items),
+            "body": body,
         }
 
-    def rule(self, info: CtrlInfo, plan: m.Plan, r: m.Rule) -> dict:
-        tests = []
+    def state_test(self, r: m.Rule) -> str | None:
         if r.state.kind == "new":
-            tests.append("state == ST_NEW")
-        elif r.state.kind == "named":
-            tests.append(f"state == {_state_enum(r.state.name or '')}")
-        if r.guard is not None and not (isinstance(r.guard, m.Const) and r.guard.value is True):
-            guard = self.expr(r.guard)
-            tests.append(guard)
-        cond = " && ".join(tests)
-        guard_text = "otherwise" if r.guard is None else c_comment(r.guard_span.text)
-        body = [f"self->status.head.status = RCS_EXEC;", f"self->status.head.rule = RULE_{plan.verb}_{r.label};"]
+            return "state == ST_NEW"
+        if r.state.kind == "named":
+            return f"state == {_state_enum(r.state.name or '')}"
+        return None
+
+    def conjuncts(self, r: m.Rule) -> list[m.Expr]:
+        """The guard as a list of `and`-ed parts (empty: always true)."""
+        out: list[m.Expr] = []
+
+        def split(e: m.Expr) -> None:
+            if isinstance(e, m.Binary) and e.op == "and":
+                split(e.left)
+                split(e.right)
+            elif not (isinstance(e, m.Const) and e.value is True):
+                out.append(e)
+
+        if r.guard is not None:
+            split(r.guard)
+        return out
+
+    def rule_group(self, plan: m.Plan, rules: list[tuple[list, m.Rule]]) -> list[str]:
+        """Rules that share their state test: consecutive rules with the same
+        leading condition test it once, and a pure function call that several
+        of their conditions make is computed once (pure functions are total
+        and have no effects, so computing one early changes nothing)."""
+        out: list[str] = []
+        i = 0
+        while i < len(rules):
+            first = self._text(rules[i][0][0]) if rules[i][0] and not isinstance(rules[i][0][0], str) else None
+            j = i + 1
+            while first is not None and j < len(rules) and rules[j][0] and not isinstance(rules[j][0][0], str) and self._text(rules[j][0][0]) == first:
+                j += 1
+            if j - i > 1:
+                inner = [(conj[1:], r) for conj, r in rules[i:j]]
+                out.append(f"if ({_strip_parens(first)}) {{")
+                out += ["    " + x for x in self.hoisted(inner)]
+                out.append("}")
+            else:
+                out += self.hoisted(rules[i:i + 1])
+            i = j
+        return out
+
+    def _text(self, e) -> str:
+        return e if isinstance(e, str) else self.expr(e)
+
+    def hoisted(self, rules: list[tuple[list, m.Rule]]) -> list[str]:
+        """Emit `rules`, computing repeated pure calls of their conditions first."""
+        counts: dict[str, tuple[int, m.Call]] = {}
+        for conj, _ in rules:
+            seen = set()
+            for part in conj:
+                if isinstance(part, str):
+                    continue
+                for e in m.walk_expr(part):
+                    if isinstance(e, m.Call) and e.kind == "fn" and e.func not in self.impure:
+                        text = self.expr(e)
+                        if text not in seen:
+                            seen.add(text)
+                            n, _ = counts.get(text, (0, e))
+                            counts[text] = (n + 1, e)
+        out: list[str] = []
+        saved = dict(self.cse)
+        for text, (n, e) in sorted(counts.items(), key=lambda kv: -len(kv[0])):
+            if n < 2 or any(text in t for t in self.cse if t != text):
+                continue
+            name = f"cse_{len(self.cse) + 1}"
+            out.append(f"const {self.ctype(e.type)} {name} = {self.expr(e)};")
+            self.cse[text] = name
+        for conj, r in rules:
+            out += self.rule(conj, r)
+        self.cse = saved
+        return out
+
+    def rule(self, conj: list, r: m.Rule) -> list[str]:
+        plan_verb = self.verb
+        own = self.own()
+        parts = [f"({t})" if isinstance(t, str) and len(conj) > 1 else self._text(t) for t in conj]
+        cond = _strip_parens(parts[0]) if len(parts) == 1 else " && ".join(parts)
+        saved, self.cse = self.cse, {}  # jobs run after the condition: no stale values
+        reports = any(isinstance(s, m.Report) for s in r.jobs)
+        body = [] if r.next.kind in ("done", "error") or reports else [f"{own}.head.status = RCS_EXEC;"]
+        body.append(f"{own}.head.rule = RULE_{plan_verb}_{r.label};")
         body += self.stmts(r.jobs, 0)
+        self.cse = saved
         nxt = r.next
         if nxt.kind == "named":
             target = _state_enum(nxt.name or "")
-            enter = [f"self->status.head.state = {target};", "self->entry_cycle = cycle;"]
+            enter = [f"{own}.head.state = {target};", "self->entry_cycle = cycle;"]
             if r.state.kind == "named" and r.state.name == nxt.name:
                 pass  # a self-loop keeps the time in state running
             elif r.state.kind == "any":
-                body.append(f"if (self->status.head.state != {target}) {{")
+                body.append(f"if ({own}.head.state != {target}) {{")
                 body += ["    " + x for x in enter]
                 body.append("}")
             else:
                 body += enter
         elif nxt.kind == "done":
-            body += ["self->status.head.status = RCS_DONE;", "self->status.head.state = ST_DONE;", "self->idle = true;"]
+            body += [f"{own}.head.status = RCS_DONE;", f"{own}.head.state = ST_DONE;", "self->plan = 0;"]
         elif nxt.kind == "error":
-            body += ["self->status.head.status = RCS_ERROR;", f"self->status.head.error_code = {nxt.code};",
-                     "self->status.head.state = ST_ERROR;", "self->idle = true;"]
-        return {
-            "comment": f"{r.label} ({where(r.span)}): {guard_text} | {r.state} -> {nxt}",
-            "cond": cond,
-            "body": body,
-        }
+            body += [f"{own}.head.status = RCS_ERROR;", f"{own}.head.error_code = {nxt.code};",
+                     f"{own}.head.state = ST_ERROR;", "self->plan = 0;"]
+        guard_text = "otherwise" if r.guard is None else c_comment(r.guard_span.text)
+        head = f"if ({cond}) {{" if cond else "{"
+        return [f"/* {r.label} ({where(r.span)}): {guard_text} | {r.state} -> {c_comment(r.next.span.text)} */", head] + ["    " + x for x in body] + ["    return;", "}"]
 
 
 _HEAD_INIT = [

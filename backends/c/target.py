@@ -53,6 +53,9 @@ class CTarget(Target):
         self.info: CtrlInfo | None = None
         self.verb: str | None = None
         self.infos = {name: lower_controller(c) for name, c in design.controllers.items()}
+        # Common guard subexpressions of the rules being emitted: call text -> local name.
+        self.cse: dict[str, str] = {}
+        self.impure = impure_functions(design)
 
     # ---- names and types ---------------------------------------------------------
 
@@ -131,17 +134,22 @@ class CTarget(Target):
             return f"{self.p}_{e.name}"
         return self.literal(e.value, e.type)
 
+    def own(self) -> str:
+        """The controller's own status buffer (it lives in the CPU's buffers)."""
+        assert self.info is not None
+        return f"buf->{self.ident(self.info.c.name)}_status"
+
     def ref_expr(self, e: m.Ref) -> str:
         name = self.ident(e.name)
         if e.kind == "gm":
-            return f"self->gm.{name}"
+            return f"buf->gm.{name}"
         if e.kind == "local":
             return f"self->loc.{name}"
         if e.kind == "status":
-            return f"self->status.f.{name}"
+            return f"{self.own()}.f.{name}"
         if e.kind == "param":
-            assert self.verb is not None, "a command parameter outside a plan"
-            return f"self->cmd.args.{self.ident(self.verb)}.{name}"
+            assert self.info is not None and self.verb is not None, "a command parameter outside a plan"
+            return f"buf->{self.ident(self.info.c.name)}_cmd.args.{self.ident(self.verb)}.{name}"
         return name  # a function's parameter
 
     def instate_expr(self, e: m.InState) -> str:
@@ -151,17 +159,18 @@ class CTarget(Target):
     def subview_expr(self, e: m.SubView) -> str:
         assert self.info is not None
         sub = self.ident(e.sub)
-        head, sent = f"&self->sub.{sub}.head", f"self->sent.{sub}"
+        status = f"buf->{sub}_status"
+        head, sent = f"&{status}.head", f"self->sent.{sub}"
         if e.attr in ("done", "error", "executing"):
             return f"rcs_sub_{e.attr}({head}, {sent})"
         if e.attr == "status":
             return f"rcs_sub_status({head}, {sent}, {self.p}_{e.sub}_STATUS_{e.value})"
         if e.attr == "error_code":
-            return f"self->sub.{sub}.head.error_code"
+            return f"{status}.head.error_code"
         if e.attr == "age":
-            return f"rcs_cycles_ns(cycle, self->sub.{sub}.head.stamp, {self.period_macro(self.info.c.cpu or '')})"
+            return f"rcs_cycles_ns(cycle, {status}.head.stamp, {self.period_macro(self.info.c.cpu or '')})"
         if e.attr == "field":
-            return f"self->sub.{sub}.f.{self.ident(e.value or '')}"
+            return f"{status}.f.{self.ident(e.value or '')}"
         raise ValueError(e.attr)
 
     def field_expr(self, e: m.Field) -> str:
@@ -194,7 +203,8 @@ class CTarget(Target):
     def call_expr(self, e: m.Call) -> str:
         args = [self.expr(a) for a in e.args]
         if e.kind in ("fn", "extern"):
-            return f"{self.p}_{e.func}({', '.join(args)})"
+            text = f"{self.p}_{e.func}({', '.join(args)})"
+            return self.cse.get(text, text)
         if e.kind == "record":
             return f"(({self.ctype(e.type)}){{{', '.join(args)}}})"
         if e.kind == "convert":
@@ -220,7 +230,7 @@ class CTarget(Target):
     # ---- statements ----------------------------------------------------------------
 
     def lvalue(self, lv: m.LValue) -> str:
-        base = {"gm": "self->gm", "local": "self->loc", "status": "self->status.f"}[lv.kind]
+        base = {"gm": "buf->gm", "local": "self->loc", "status": f"{self.own()}.f"}[lv.kind]
         return ".".join([base, self.ident(lv.name)] + [self.ident(p) for p in lv.path])
 
     def assign_stmt(self, s: m.Assign, indent: int) -> list[str]:
@@ -242,15 +252,17 @@ class CTarget(Target):
         pad = "    " * indent
         sub = self.ident(s.sub)
         verb = self.design.controllers[s.sub].verbs[s.verb]
-        out = [f"{pad}self->out.{sub}.head.verb = {self.p}_{s.sub}_VERB_{s.verb};"]
+        # Written in place: nothing else runs during this step, and the serial
+        # that makes the command new is set at the write phase.
+        out = [f"{pad}buf->{sub}_cmd.head.verb = {self.p}_{s.sub}_VERB_{s.verb};"]
         for p, a in zip(verb.params, s.args):
-            out.append(f"{pad}self->out.{sub}.args.{self.ident(s.verb)}.{self.ident(p.name)} = {self.expr(a)};")
+            out.append(f"{pad}buf->{sub}_cmd.args.{self.ident(s.verb)}.{self.ident(p.name)} = {self.expr(a)};")
         out.append(f"{pad}self->send.{sub} = true;")
         return out
 
     def report_stmt(self, s: m.Report, indent: int) -> list[str]:
         assert self.info is not None
-        return ["    " * indent + f"self->status.head.status = {self.p}_{self.info.c.name}_STATUS_{s.status};"]
+        return ["    " * indent + f"{self.own()}.head.status = {self.p}_{self.info.c.name}_STATUS_{s.status};"]
 
     def if_stmt(self, s: m.If, indent: int) -> list[str]:
         pad = "    " * indent
@@ -264,6 +276,25 @@ class CTarget(Target):
             out.extend(self.stmts(s.else_body, indent + 1))
         out.append(f"{pad}}}")
         return out
+
+
+def impure_functions(design: m.Design) -> set[str]:
+    """Functions that call an extern, directly or through another function.
+
+    Externs may have effects (they are the user's code), so a call of one
+    of these is never moved or merged; every other function is pure and total.
+    """
+    calls = {f.name: {e.func for e in m.walk_expr(f.body) if isinstance(e, m.Call) and e.kind in ("fn", "extern")}
+             for f in design.functions.values() if f.body is not None}
+    impure = {f.name for f in design.functions.values() if f.extern}
+    changed = True
+    while changed:
+        changed = False
+        for name, callees in calls.items():
+            if name not in impure and callees & impure:
+                impure.add(name)
+                changed = True
+    return impure
 
 
 def _strip_parens(text: str) -> str:

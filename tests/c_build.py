@@ -1,0 +1,133 @@
+"""Shared helpers of the backend tests: generate a design's code, compile it, run it.
+
+Builds are cached per (target, design, configuration) for the whole test
+session, so each example is generated and compiled once per configuration
+however many scenarios run on it.  The reference traces (`rcsc sim`) are
+cached per scenario.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+from rcsc import cli
+from rcsc.driver import check_path
+from rcsc.runner import run_scenario
+from rcsc.scenario import text_to_scenario
+from rcsc.source import SourceFile
+from rcsc.trace import to_jsonl
+
+ROOT = Path(__file__).resolve().parent.parent
+
+STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wshadow", "-Werror", "-ffp-contract=off"]
+SANITIZE = ["-fsanitize=undefined,address", "-fno-sanitize-recover=all", "-fno-omit-frame-pointer", "-g"]
+
+# name -> (compiler, flags)
+C_CONFIGS = {
+    "gcc-O0": ("gcc", ["-O0"]),
+    "gcc-O2": ("gcc", ["-O2"]),
+    "clang-O2": ("clang", ["-O2"]),
+    "gcc-O1-asan-ubsan": ("gcc", ["-O1", *SANITIZE]),
+    "clang-O1-asan-ubsan": ("clang", ["-O1", *SANITIZE]),
+}
+
+
+def _examples() -> list[tuple[Path, Path]]:
+    """(design, scenario) for every example scenario and the simulator's test designs."""
+    pairs = []
+    for design in sorted(ROOT.glob("examples/*/*.rcs")):
+        for scn in sorted((design.parent / "scenarios").glob("*.scn")):
+            pairs.append((design, scn))
+    pairs.append((ROOT / "tests/sim/ahead_paper.rcs", ROOT / "tests/sim/ahead_branches.scn"))
+    pairs.append((ROOT / "tests/sim/numeric.rcs", ROOT / "tests/sim/numeric_edges.scn"))
+    return pairs
+
+
+CONFORMANCE = _examples()
+
+
+def case_id(pair: tuple[Path, Path]) -> str:
+    return f"{pair[0].stem}/{pair[1].stem}"
+
+
+_REFERENCE: dict[Path, bytes] = {}
+
+
+def reference_trace(design: Path, scn: Path) -> bytes:
+    """The JSON-lines trace of `rcsc sim DESIGN --scenario SCN`."""
+    if scn not in _REFERENCE:
+        result = check_path(str(design))
+        assert result.ok and result.model is not None, f"{design} does not check clean"
+        sc = text_to_scenario(SourceFile(str(scn), scn.read_text(encoding="utf-8")), result.model, result.diags)
+        assert sc is not None, f"{scn} does not load"
+        run = run_scenario(result.model, sc)
+        _REFERENCE[scn] = to_jsonl(result.model, run.snapshots).encode("utf-8")
+    return _REFERENCE[scn]
+
+
+def generate(design: Path, target: str, out: Path, *extra: str) -> str:
+    """`rcsc build DESIGN --target T -o OUT`; returns its stderr (asserts exit 0)."""
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        rc = cli.main(["build", str(design), "--target", target, "-o", str(out), *extra])
+    assert rc == 0, f"rcsc build failed ({rc}):\n{err.getvalue()}"
+    return err.getvalue()
+
+
+def compile_c(src: Path, cc: str, flags: list[str], exe: Path) -> None:
+    sources = sorted(str(p) for p in src.glob("*.c"))
+    proc = subprocess.run([cc, *STRICT, *flags, "-o", str(exe), *sources], capture_output=True, text=True)
+    assert proc.returncode == 0, f"{cc} {' '.join(flags)} failed on {src}:\n{proc.stderr}"
+    assert proc.stderr == "", f"{cc} printed warnings:\n{proc.stderr}"
+
+
+class Builds:
+    """Session cache of generated and compiled designs."""
+
+    def __init__(self, base: Path) -> None:
+        self.base = base
+        self.sources: dict[tuple[str, Path], Path] = {}
+        self.binaries: dict[tuple[Path, str], Path] = {}
+
+    def source(self, design: Path, target: str = "c") -> Path:
+        key = (target, design)
+        if key not in self.sources:
+            out = self.base / f"{target}-{design.stem}"
+            generate(design, target, out)
+            self.sources[key] = out
+        return self.sources[key]
+
+    def c_binary(self, design: Path, config: str) -> Path:
+        key = (design, config)
+        if key not in self.binaries:
+            cc, flags = C_CONFIGS[config]
+            src = self.source(design, "c")
+            exe = self.base / f"c-{design.stem}-{config}.bin"
+            compile_c(src, cc, flags, exe)
+            self.binaries[key] = exe
+        return self.binaries[key]
+
+
+def run_main(exe: Path, scn: Path, trace: Path, *extra: str, timeout: float = 300) -> subprocess.CompletedProcess:
+    env = dict(os.environ, ASAN_OPTIONS="detect_leaks=1:abort_on_error=0", UBSAN_OPTIONS="print_stacktrace=1")
+    return subprocess.run(
+        [str(exe), "--fast", "--no-console", "--no-timing", "--scenario", str(scn), "--trace", str(trace), *extra],
+        capture_output=True, text=True, timeout=timeout, env=env, stdin=subprocess.DEVNULL,
+    )
+
+
+def first_difference(a: bytes, b: bytes) -> str:
+    la, lb = a.decode().splitlines(), b.decode().splitlines()
+    for i, (x, y) in enumerate(zip(la, lb), 1):
+        if x != y:
+            return f"line {i} differs:\n  sim:      {x}\n  compiled: {y}"
+    return f"lengths differ: sim {len(la)} lines, compiled {len(lb)} lines"
+
+
+def have(tool: str) -> bool:
+    return shutil.which(tool) is not None
