@@ -50,3 +50,22 @@ def test_installed_wheel_checks_a_design_from_another_folder(tmp_path: Path) -> 
     assert result.returncode == 0, result.stdout + result.stderr
     result = subprocess.run([str(py), "-m", "rcsc", "check", "submarine.rcs", "--format", "short"], cwd=work, env=env, capture_output=True, text=True)
     assert result.returncode == 0, result.stdout + result.stderr
+
+    # Code generation from the installed package: templates and runtime files
+    # come from inside the wheel, and the C output compiles and runs.
+    for target in ("c", "rust"):
+        assert f"rcsc/backends/{target}/templates" in "\n".join(names), f"no {target} templates in the wheel"
+    assert "rcsc/backends/c/runtime/rcs_runtime.c" in names
+    assert "rcsc/backends/rust/runtime/host/mod.rs" in names
+    result = subprocess.run([str(venv / "bin" / "rcsc"), "targets"], cwd=work, env=env, capture_output=True, text=True)
+    assert result.returncode == 0 and result.stdout.split()[0::2][:2] == ["c", "rust"], result.stdout + result.stderr
+    result = subprocess.run(
+        [str(venv / "bin" / "rcsc"), "build", "submarine.rcs", "--target", "c", "-o", "out"], cwd=work, env=env, capture_output=True, text=True
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    subprocess.run(["make", "-s", "-C", str(work / "out"), "CC=gcc"], check=True, capture_output=True)
+    run = subprocess.run(
+        [str(work / "out" / "submarine_MAIN"), "--fast", "--no-console", "--no-timing", "--cycles", "3", "--trace", "-"],
+        capture_output=True, text=True,
+    )
+    assert run.returncode == 0 and len(run.stdout.splitlines()) == 3, run.stderr
