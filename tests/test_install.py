@@ -53,12 +53,10 @@ def test_installed_wheel_checks_a_design_from_another_folder(tmp_path: Path) -> 
 
     # Code generation from the installed package: templates and runtime files
     # come from inside the wheel, and the C output compiles and runs.
-    for target in ("c", "rust"):
-        assert f"rcsc/backends/{target}/templates" in "\n".join(names), f"no {target} templates in the wheel"
+    assert "rcsc/backends/c/templates/ctrl.c.j2" in names
     assert "rcsc/backends/c/runtime/rcs_runtime.c" in names
-    assert "rcsc/backends/rust/runtime/host/mod.rs" in names
     result = subprocess.run([str(venv / "bin" / "rcsc"), "targets"], cwd=work, env=env, capture_output=True, text=True)
-    assert result.returncode == 0 and result.stdout.split()[0::2][:2] == ["c", "rust"], result.stdout + result.stderr
+    assert result.returncode == 0 and result.stdout.split()[0] == "c", result.stdout + result.stderr
     result = subprocess.run(
         [str(venv / "bin" / "rcsc"), "build", "submarine.rcs", "--target", "c", "-o", "out"], cwd=work, env=env, capture_output=True, text=True
     )
