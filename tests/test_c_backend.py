@@ -147,7 +147,7 @@ def test_timing_table_lists_every_scheduled_controller(builds: Builds, tmp_path:
     proc = subprocess.run([str(exe), "--fast", "--no-console", "--cycles", "50"], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
     table = proc.stderr
-    for name, budget in (("TURBINE_SIM", "200.0 us"), ("SHIP_SIM", "300.0 us"), ("SM", "1000.0 us"), ("PR", "2000.0 us"), ("TB", "1000.0 us")):
+    for name, budget in (("TURBINE_SIM", "200.000 us"), ("SHIP_SIM", "300.000 us"), ("SM", "1000.000 us"), ("PR", "2000.000 us"), ("TB", "1000.000 us")):
         row = next((line for line in table.splitlines() if line.split()[:1] == [name]), None)
         assert row is not None, f"no row for {name}:\n{table}"
         assert budget in row, row

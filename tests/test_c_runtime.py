@@ -476,10 +476,10 @@ def test_timing_table_and_heartbeat(exe):
     lines = r.stderr.splitlines()
     assert lines[0] == "rcs: timing of fixture on MAIN, 20 cycles, heartbeat 1000.0 us"
     assert lines[1].split() == ["controller", "budget", "last", "min", "max", "mean", "overruns"]
-    t = r"\d+\.\d us"
+    t = r"\d+\.\d{3} us"
     assert re.fullmatch(rf"SUB +- +{t} +{t} +{t} +{t} +0", lines[2]), lines[2]  # schedule order: SUB, TOP
-    assert re.fullmatch(rf"TOP +1000\.0 us +{t} +{t} +{t} +{t} +\d+", lines[3]), lines[3]
-    assert re.fullmatch(rf"cycles: 20, max work {t} of the 1000\.0 us period, \d+ cycle overruns?", lines[4]), lines[4]
+    assert re.fullmatch(rf"TOP +1000\.000 us +{t} +{t} +{t} +{t} +\d+", lines[3]), lines[3]
+    assert re.fullmatch(rf"cycles: 20, max work \d+\.\d us of the 1000\.0 us period, \d+ cycle overruns?", lines[4]), lines[4]
     assert len(lines) == 5
 
 

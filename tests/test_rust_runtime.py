@@ -344,8 +344,8 @@ def test_timing_table(crate: Crate) -> None:
     assert lines[0] == "rcs: timing of fixture on MAIN, 5 cycles, heartbeat 1000.0 us"
     assert lines[1].split() == ["controller", "budget", "last", "min", "max", "mean", "overruns"]
     assert [line.split()[0] for line in lines[2:4]] == ["SUB", "TOP"]  # schedule order
-    assert re.fullmatch(r"SUB +- +(\d+\.\d us +){4}0", lines[2]), lines[2]
-    assert re.fullmatch(r"TOP +1000\.0 us +(\d+\.\d us +){4}0", lines[3]), lines[3]
+    assert re.fullmatch(r"SUB +- +(\d+\.\d{3} us +){4}0", lines[2]), lines[2]
+    assert re.fullmatch(r"TOP +1000\.000 us +(\d+\.\d{3} us +){4}0", lines[3]), lines[3]
     assert re.fullmatch(r"cycles: 5, max work \d+\.\d us of the 1000\.0 us period, \d+ cycle overruns?", lines[4]), lines[4]
     assert len(lines) == 5
 

@@ -1526,7 +1526,7 @@ static double us(int64_t ns) { return (double)ns / 1000.0; }
 
 static void fmt_us(char *buf, size_t size, int64_t ns, int have) {
     if (have)
-        snprintf(buf, size, "%.1f us", us(ns));
+        snprintf(buf, size, "%.3f us", us(ns));
     else
         snprintf(buf, size, "-");
 }

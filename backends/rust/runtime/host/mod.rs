@@ -303,7 +303,7 @@ fn sleep_until(base: Instant, deadline: i64) {
     }
 }
 
-/// Nanoseconds as microseconds, for `{:.1}`.
+/// Nanoseconds as microseconds (steps take well under a microsecond: three decimals).
 fn us(ns: i64) -> f64 {
     ns as f64 / 1000.0
 }
@@ -320,7 +320,7 @@ struct StepStats {
 
 fn fmt_us(ns: i64, have: bool) -> String {
     if have {
-        format!("{:.1} us", us(ns))
+        format!("{:.3} us", us(ns))
     } else {
         "-".to_string()
     }
