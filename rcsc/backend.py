@@ -38,6 +38,7 @@ BANNER_WINDOW = 400
 _REGISTRY: dict[str, str] = {
     # name -> module that defines the target class (imported on first use)
     "c": "rcsc.backends.c",
+    "rust": "rcsc.backends.rust",
 }
 _LOADED: dict[str, type["Target"]] = {}
 

@@ -223,8 +223,8 @@ def _call(e: m.Call, args: list, env: Env):
     if e.kind == "builtin":
         if e.func == "abs":
             v = args[0]
-            if isinstance(e.type, IntType):
-                return numeric.wrap(abs(v), e.type)
+            if isinstance(e.type, IntType) or e.type == DURATION:
+                return numeric.wrap(abs(v), e.type if isinstance(e.type, IntType) else I64)
             return math.fabs(v)
         if e.func == "seconds":
             return args[0] / 1e9

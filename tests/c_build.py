@@ -3,7 +3,9 @@
 Builds are cached per (target, design, configuration) for the whole test
 session, so each example is generated and compiled once per configuration
 however many scenarios run on it.  The reference traces (`rcsc sim`) are
-cached per scenario.
+cached per scenario.  C is compiled with gcc/clang (`C_CONFIGS`), Rust with
+cargo (`RUST_PROFILES`, one CARGO_TARGET_DIR per crate so that cargo reuses
+its work between the profiles and between the tests).
 """
 
 from __future__ import annotations
@@ -11,8 +13,9 @@ from __future__ import annotations
 import contextlib
 import io
 import os
-import shutil
+import re
 import subprocess
+import tomllib
 from pathlib import Path
 
 from rcsc import cli
@@ -37,6 +40,10 @@ C_CONFIGS = {
 }
 
 
+# Both with overflow-checks = true (the generated Cargo.toml sets it in every profile).
+RUST_PROFILES = ("debug", "release")
+
+
 def _examples() -> list[tuple[Path, Path]]:
     """(design, scenario) for every example scenario and the simulator's test designs."""
     pairs = []
@@ -45,6 +52,9 @@ def _examples() -> list[tuple[Path, Path]]:
             pairs.append((design, scn))
     pairs.append((ROOT / "tests/sim/ahead_paper.rcs", ROOT / "tests/sim/ahead_branches.scn"))
     pairs.append((ROOT / "tests/sim/numeric.rcs", ROOT / "tests/sim/numeric_edges.scn"))
+    # Every numeric type and conversion, records everywhere, target-language
+    # keywords as names, names long enough to force line breaks.
+    pairs.append((ROOT / "tests/stress/stress.rcs", ROOT / "tests/stress/stress.scn"))
     return pairs
 
 
@@ -86,6 +96,18 @@ def compile_c(src: Path, cc: str, flags: list[str], exe: Path) -> None:
     assert proc.stderr == "", f"{cc} printed warnings:\n{proc.stderr}"
 
 
+def cargo_build(crate: Path, profile: str, env: dict) -> Path:
+    """`cargo build --offline` of a generated crate (asserts no error and no warning);
+    returns the Main Program of its (single) CPU."""
+    cmd = ["cargo", "build", "--offline", *(["--release"] if profile == "release" else [])]
+    proc = subprocess.run(cmd, cwd=crate, env=env, capture_output=True, text=True)
+    assert proc.returncode == 0, f"cargo build ({profile}) failed on {crate}:\n{proc.stderr[-4000:]}"
+    assert not re.search(r"^warning", proc.stderr, re.M), f"cargo build ({profile}) warned:\n{proc.stderr[-4000:]}"
+    bins = tomllib.loads((crate / "Cargo.toml").read_text(encoding="utf-8"))["bin"]
+    assert len(bins) == 1, "one Main Program per CPU; the conformance designs have one CPU"
+    return Path(env["CARGO_TARGET_DIR"]) / profile / bins[0]["name"]
+
+
 class Builds:
     """Session cache of generated and compiled designs."""
 
@@ -112,6 +134,16 @@ class Builds:
             self.binaries[key] = exe
         return self.binaries[key]
 
+    def cargo_env(self, design: Path) -> dict:
+        """The environment of cargo for a design's crate: its own target folder."""
+        return dict(os.environ, CARGO_TARGET_DIR=str(self.base / f"cargo-{design.stem}"), CARGO_TERM_COLOR="never")
+
+    def rust_binary(self, design: Path, profile: str) -> Path:
+        key = (design, f"rust-{profile}")
+        if key not in self.binaries:
+            self.binaries[key] = cargo_build(self.source(design, "rust"), profile, self.cargo_env(design))
+        return self.binaries[key]
+
 
 def run_main(exe: Path, scn: Path, trace: Path, *extra: str, timeout: float = 300) -> subprocess.CompletedProcess:
     env = dict(os.environ, ASAN_OPTIONS="detect_leaks=1:abort_on_error=0", UBSAN_OPTIONS="print_stacktrace=1")
@@ -128,6 +160,3 @@ def first_difference(a: bytes, b: bytes) -> str:
             return f"line {i} differs:\n  sim:      {x}\n  compiled: {y}"
     return f"lengths differ: sim {len(la)} lines, compiled {len(lb)} lines"
 
-
-def have(tool: str) -> bool:
-    return shutil.which(tool) is not None

@@ -67,3 +67,12 @@ def test_installed_wheel_checks_a_design_from_another_folder(tmp_path: Path) -> 
         capture_output=True, text=True,
     )
     assert run.returncode == 0 and len(run.stdout.splitlines()) == 3, run.stderr
+
+    # The Rust target too: its templates and runtime (num.rs, host/) come from the wheel.
+    assert "rcsc/backends/rust/templates/ctrl.rs.j2" in names
+    assert "rcsc/backends/rust/runtime/num.rs" in names and "rcsc/backends/rust/runtime/host/mod.rs" in names
+    result = subprocess.run(
+        [str(venv / "bin" / "rcsc"), "build", "submarine.rcs", "--target", "rust", "-o", "rs"], cwd=work, env=env, capture_output=True, text=True
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert (work / "rs" / "src" / "num.rs").is_file() and (work / "rs" / "host" / "mod.rs").is_file()

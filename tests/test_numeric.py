@@ -124,3 +124,24 @@ def test_constant_folding_uses_the_same_rules(tmp_path: Path) -> None:
     result = check_path(str(src))
     consts = {k: v.value for k, v in result.model.consts.items()}
     assert consts == {"WRAP": I32_MIN, "DIV0": 0, "MINDIV": I32_MIN, "NAN_INT": 0, "SAT": 0}
+
+
+def test_abs_of_a_duration_is_a_duration(tmp_path: Path) -> None:
+    """abs() of a duration stays whole nanoseconds (it was once computed as a float)."""
+    src = tmp_path / "d.rcs"
+    src.write_text(
+        "design d\nconst TICK: duration = 5 ms\nconst A: duration = abs(-TICK)\n"
+        "gm t: duration = 0 ms from env\n"
+        "controller C level 1 budget 1 ms {\n    reads t\n    status a: duration = 0 ms\n    pre { a = abs(t - TICK); }\n}\n"
+        "cpu MAIN {\n    heartbeat 10 ms\n    schedule C\n}\n",
+        encoding="utf-8",
+    )
+    result = check_path(str(src))
+    assert result.ok, [d.message for d in result.diags]
+    assert result.model.consts["A"].value == 5_000_000
+    sim = Simulator(result.model)
+    sim.set_input("t", 2_000_000)
+    sim.begin_cycle()
+    sim.run_cycle()
+    assert sim.statuses["C"].fields["a"] == 3_000_000
+    assert type(sim.statuses["C"].fields["a"]) is int

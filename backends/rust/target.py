@@ -1,0 +1,395 @@
+"""The Rust target: type table, expressions and statements (`<node>_expr`, `<node>_stmt`).
+
+Expressions are built as trees (`rcsc.backends.rust.fmt`), which lay
+themselves out as rustfmt does; `<node>_stmt` methods return the lines of a
+statement.
+
+Naming in the generated Rust: the design's names are kept (a Rust keyword,
+or a name that would clash with a generated one, gets a trailing `_`), so
+the library allows the naming lints.  Design-wide items live in `types`
+(types, constants, Global Memory, buffers) and `functions` (pure
+functions); a controller's states and rules are associated constants of its
+struct (`Self::S_S1`, `Self::RULE_AHEAD_E0`).
+
+Numbers follow DESIGN.md section 3 with no panic even under
+`overflow-checks = true`: integer arithmetic is `wrapping_*` (as
+`i32::wrapping_add(a, b)`) or a helper of `num` (division, remainder,
+abs), f64 arithmetic is plain Rust, conversions are `as` (which saturates
+float to int, gives 0 for NaN and wraps int to int, the language's rules).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+from rcsc import model as m
+from rcsc.backend import BuildOptions, CtrlInfo, Target, lower_controller
+from rcsc.backends.rust.fmt import (
+    P_POSTFIX,
+    P_UNARY,
+    Atom,
+    Bin,
+    Call,
+    Cast,
+    FieldOf,
+    If,
+    Node,
+    Paren,
+    Struct,
+    Unary,
+    assign,
+    expr_stmt,
+    if_open,
+    let,
+    pad,
+)
+from rcsc.types import BOOL, DURATION, I64, U32, EnumType, FloatType, IntType, RecordType, Type
+
+RUST_KEYWORDS = frozenset(
+    "as break const continue crate else enum extern false fn for if impl in let loop match mod move mut pub ref "
+    "return self Self static struct super trait true type unsafe use where while async await dyn abstract become "
+    "box do final macro override priv typeof unsized virtual yield try gen union".split()
+)
+# Names the generated code defines or uses beside the design's, per namespace:
+# a design name that equals one (or matches a pattern of them) gets a trailing `_`.
+TYPE_RESERVED = frozenset(
+    "Buffers Gm StatusHead CommandHead Subs Sent Out Sending GmCopy Locals Externs ExternsImpl NoExterns Io Main "
+    "num core std alloc types functions host io Option Result Default Clone Copy Debug PartialEq Eq Send Sync "
+    "Sized Drop Fn FnMut FnOnce Vec String Box Value Kind TypeDesc FieldDesc VerbDesc ConstDesc GmDesc CtrlDesc "
+    "DesignDesc StatusView HostDesign".split()
+)
+_TYPE_PATTERN = re.compile(r"_(cmd|status|fields|args)$|^ctrl_")
+VALUE_RESERVED = frozenset(
+    "sub_done sub_error sub_executing sub_status state cycle ext buf main name index status_none "
+    "TYPES CONSTS GM CTRLS DESIGN Some None Ok Err field_desc const_desc gm_desc verb_desc".split()
+)
+_VALUE_PATTERN = re.compile(r"_VERB_|_STATUS_|_PERIOD_NS$|_STATES$|_RULES$|_of$|_value$|^T_|^status_")
+
+INT_NAME = {"i32": "i32", "i64": "i64", "u32": "u32", "duration": "i64"}
+WRAPPING = {"+": "wrapping_add", "-": "wrapping_sub", "*": "wrapping_mul"}
+NUM_DIV = {"/": "div", "%": "rem"}
+RUST_BIN = {"and": "&&", "or": "||"}
+
+
+def rust_comment(text: str) -> str:
+    """Text that is safe on one `//` comment line."""
+    return re.sub(r"\s+", " ", text).strip()
+
+
+def rust_string(text: str) -> str:
+    out = ['"']
+    for ch in text:
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif ch == "\n":
+            out.append("\\n")
+        elif ord(ch) < 0x20:
+            out.append(f"\\u{{{ord(ch):x}}}")
+        else:
+            out.append(ch)
+    out.append('"')
+    return "".join(out)
+
+
+class RustTarget(Target):
+    name = "rust"
+    summary = "Rust crate: a no_std, unsafe-free controller library and a std Main Program per CPU"
+    package = "rcsc.backends.rust"
+
+    def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
+        super().__init__(design, options)
+        self.crate = design.name if design.name not in RUST_KEYWORDS | {"core", "std", "alloc", "host", "test", "proc_macro"} else design.name + "_rcs"
+        self.infos = {name: lower_controller(c) for name, c in design.controllers.items()}
+        # Context of the code being emitted.
+        self.info: CtrlInfo | None = None
+        self.verb: str | None = None
+        # What the code emitted since the last `begin()` used: "num", "types",
+        # "functions", "ext", "cycle".
+        self.uses: set[str] = set()
+        self._globals = set(design.consts) | set(design.enums) | set(design.records) | set(design.functions)
+
+    def begin(self) -> None:
+        self.uses = set()
+
+    # ---- names and types ---------------------------------------------------------
+
+    @staticmethod
+    def ident(name: str) -> str:
+        """A design name as a Rust field, member or method name (only keywords clash)."""
+        return name + "_" if name in RUST_KEYWORDS else name
+
+    @staticmethod
+    def tname(name: str) -> str:
+        """A design name in the type namespace (enums, records, controllers)."""
+        if name in RUST_KEYWORDS or name in TYPE_RESERVED or _TYPE_PATTERN.search(name):
+            return name + "_"
+        return name
+
+    @staticmethod
+    def vname(name: str) -> str:
+        """A design name in the value namespace (constants, functions)."""
+        if name in RUST_KEYWORDS or name in VALUE_RESERVED or _VALUE_PATTERN.search(name):
+            return name + "_"
+        return name
+
+    def param(self, name: str) -> str:
+        """A function parameter: also kept apart from the design's global names (a parameter
+        named like a constant would be a constant pattern in Rust)."""
+        ident = self.vname(name)
+        return ident + "_" if ident in self._globals or ident == "ext" else ident
+
+    def rtype(self, t: Type) -> str:
+        if t == BOOL:
+            return "bool"
+        if t == DURATION:
+            return "i64"
+        if isinstance(t, IntType):
+            return t.name
+        if isinstance(t, FloatType):
+            return "f64"
+        if isinstance(t, (EnumType, RecordType)):
+            return self.tname(t.name)
+        raise ValueError(f"no Rust type for {t}")
+
+    def period_const(self, cpu: str) -> str:
+        return f"{cpu}_PERIOD_NS"
+
+    @staticmethod
+    def state_const(name: str) -> str:
+        return {"": "ST_NONE", "new": "ST_NEW", "done": "ST_DONE", "error": "ST_ERROR"}.get(name, f"S_{name}")
+
+    @staticmethod
+    def rule_const(verb: str, label: str) -> str:
+        return f"RULE_{verb}_{label}"
+
+    # ---- values --------------------------------------------------------------------
+
+    def literal(self, value, t: Type) -> Node:
+        if t == BOOL:
+            return Atom("true" if value else "false")
+        if isinstance(t, IntType) or t == DURATION:
+            v = int(value)
+            it = I64 if t == DURATION else t
+            assert isinstance(it, IntType)
+            if it.signed and v == it.min:
+                return Atom(f"{it.name}::MIN")
+            return Atom(str(v), P_UNARY if v < 0 else P_POSTFIX)
+        if isinstance(t, FloatType):
+            x = float(value)
+            if math.isnan(x):
+                return Atom("f64::NAN")
+            if math.isinf(x):
+                return Atom("f64::INFINITY" if x > 0 else "f64::NEG_INFINITY")
+            text = repr(x)
+            if "." not in text and "e" not in text and "n" not in text:
+                text += ".0"
+            return Atom(text, P_UNARY if text.startswith("-") else P_POSTFIX)
+        if isinstance(t, EnumType):
+            return Atom(f"{self.tname(t.name)}::{self.ident(str(value))}")
+        if isinstance(t, RecordType):
+            return Struct(self.tname(t.name), [(self.ident(n), self.literal(value[n], ft)) for n, ft in t.fields])
+        raise ValueError(f"no Rust literal for {t}")
+
+    def zero(self, t: Type):
+        if t == BOOL:
+            return False
+        if isinstance(t, FloatType):
+            return 0.0
+        if isinstance(t, EnumType):
+            return t.members[0]
+        if isinstance(t, RecordType):
+            return {n: self.zero(ft) for n, ft in t.fields}
+        return 0
+
+    def init_value(self, v: m.Var) -> Node:
+        return self.literal(v.init if v.init is not None else self.zero(v.type), v.type)
+
+    # ---- expressions ---------------------------------------------------------------
+
+    def const_expr(self, e: m.Const) -> Node:
+        if e.name is not None and e.name in self.design.consts:
+            self.uses.add("types")
+            return Atom(self.vname(e.name))
+        if isinstance(e.type, (EnumType, RecordType)):
+            self.uses.add("types")
+        return self.literal(e.value, e.type)
+
+    def ref_expr(self, e: m.Ref) -> Node:
+        name = self.ident(e.name)
+        if e.kind == "gm":
+            return Atom(f"self.gm.{name}")
+        if e.kind == "local":
+            return Atom(f"self.loc.{name}")
+        if e.kind == "status":
+            return Atom(f"self.status.f.{name}")
+        if e.kind == "param":
+            assert self.verb is not None, "a command parameter outside a plan"
+            return Atom(f"self.cmd.args.{self.ident(self.verb)}.{name}")
+        return Atom(self.param(e.name))  # a function's parameter
+
+    def _period(self) -> str:
+        assert self.info is not None
+        self.uses.add("types")
+        return self.period_const(self.info.c.cpu or "")
+
+    def instate_expr(self, e: m.InState) -> Node:
+        self.uses.update(("num", "cycle"))
+        return Call("num::cycles_ns", [Atom("cycle"), Atom("self.entry_cycle"), Atom(self._period())])
+
+    def subview_expr(self, e: m.SubView) -> Node:
+        assert self.info is not None
+        sub = self.ident(e.sub)
+        head, sent = Unary("&", Atom(f"self.sub.{sub}.head")), Atom(f"self.sent.{sub}")
+        if e.attr in ("done", "error", "executing"):
+            self.uses.add("types")
+            return Call(f"sub_{e.attr}", [head, sent])
+        if e.attr == "status":
+            self.uses.add("types")
+            return Call("sub_status", [head, sent, Atom(f"{e.sub}_STATUS_{e.value}")])
+        if e.attr == "error_code":
+            return Atom(f"self.sub.{sub}.head.error_code")
+        if e.attr == "age":
+            self.uses.update(("num", "cycle"))
+            return Call("num::cycles_ns", [Atom("cycle"), Atom(f"self.sub.{sub}.head.stamp"), Atom(self._period())])
+        if e.attr == "field":
+            return Atom(f"self.sub.{sub}.f.{self.ident(e.value or '')}")
+        raise ValueError(e.attr)
+
+    def field_expr(self, e: m.Field) -> Node:
+        obj = self.expr(e.obj)
+        name = self.ident(e.name)
+        if isinstance(obj, Atom) and obj.prec == P_POSTFIX:
+            return Atom(f"{obj.text}.{name}")
+        if obj.prec < P_POSTFIX or isinstance(obj, Struct):
+            obj = Paren(obj)
+        return Atom(f"{obj.flat()}.{name}") if isinstance(obj, Atom) else FieldOf(obj, name)
+
+    def unary_expr(self, e: m.Unary) -> Node:
+        v = self.expr(e.operand)
+        if e.op == "not":
+            return Unary.make("!", v)
+        if e.type.name in INT_NAME:
+            return Call(f"{INT_NAME[e.type.name]}::wrapping_neg", [v])
+        return Unary.make("-", v)
+
+    def binary_expr(self, e: m.Binary) -> Node:
+        a, b = self.expr(e.left), self.expr(e.right)
+        if e.op in RUST_BIN:
+            return Bin.make(RUST_BIN[e.op], a, b)
+        if e.type == BOOL:
+            if e.left.type == BOOL and e.op in ("==", "!=") and (_bool_const(e.left) is not None or _bool_const(e.right) is not None):
+                # `x == true` is `x` (clippy::bool_comparison); both sides are evaluated either way.
+                lit, other = (e.left, b) if _bool_const(e.left) is not None else (e.right, a)
+                positive = (_bool_const(lit) is True) == (e.op == "==")
+                return other if positive else Unary.make("!", other)
+            return Bin.make(e.op, a, b)
+        if e.type.name in INT_NAME:
+            t = INT_NAME[e.type.name]
+            if e.op in WRAPPING:
+                return Call(f"{t}::{WRAPPING[e.op]}", [a, b])
+            self.uses.add("num")
+            return Call(f"num::{NUM_DIV[e.op]}_{t}", [a, b])
+        return Bin.make(e.op, a, b)
+
+    def ifexpr_expr(self, e: m.IfExpr) -> Node:
+        return If(self.expr(e.cond), self.expr(e.then), self.expr(e.else_))
+
+    def call_expr(self, e: m.Call) -> Node:
+        args = [self.expr(a) for a in e.args]
+        if e.kind == "fn":
+            self.uses.add("functions")
+            return Call(self.vname(e.func), args)
+        if e.kind == "extern":
+            # `Externs::f(ext, ...)` rather than `ext.f(...)`: the same call, laid out as a
+            # call (rustfmt lays method calls out as chains).
+            self.uses.add("ext")
+            return Call(f"Externs::{self.ident(e.func)}", [Atom("ext")] + args)
+        if e.kind == "record":
+            self.uses.add("types")
+            assert isinstance(e.type, RecordType)
+            return Struct(self.tname(e.type.name), [(self.ident(n), a) for (n, _), a in zip(e.type.fields, args)])
+        if e.kind == "convert":
+            return self._convert(args[0], e.args[0].type, e.type)
+        if e.func == "seconds":
+            return Bin.make("/", Cast.make(args[0], "f64"), Atom("1e9"))
+        is_float = isinstance(e.type, FloatType)
+        if e.func == "abs":
+            self.uses.add("num")
+            if is_float:
+                return Call("num::fabs", args)
+            if e.type == U32:
+                return args[0]  # |x| of an unsigned value is x
+            return Call(f"num::abs_{INT_NAME[e.type.name]}", args)
+        if is_float:
+            self.uses.add("num")
+            return Call(f"num::{e.func}_f64", args)
+        return Call(f"core::cmp::{e.func}", args)
+
+    def _convert(self, v: Node, src: Type, dst: Type) -> Node:
+        s, d = self.rtype(src), self.rtype(dst)
+        if s == d:
+            return v
+        return Cast.make(v, d)
+
+    # ---- statements ----------------------------------------------------------------
+
+    def lvalue(self, lv: m.LValue) -> str:
+        base = {"gm": "self.gm", "local": "self.loc", "status": "self.status.f"}[lv.kind]
+        return ".".join([base, self.ident(lv.name)] + [self.ident(p) for p in lv.path])
+
+    def assign_stmt(self, s: m.Assign, indent: int) -> list[str]:
+        target = self.lvalue(s.target)
+        value = self.expr(s.value)
+        if s.op == "=":
+            return assign(target, "=", value, indent)
+        op = s.op[0]
+        t = s.target.type
+        if t.name in INT_NAME:
+            return assign(target, "=", Call(f"{INT_NAME[t.name]}::{WRAPPING[op]}", [Atom(target), value]), indent)
+        return assign(target, s.op, value, indent)
+
+    def callstmt_stmt(self, s: m.CallStmt, indent: int) -> list[str]:
+        e = self.expr(s.call)
+        if s.call.kind in ("fn", "extern"):
+            return expr_stmt(e, indent)
+        # A built-in or a conversion has no effect; it is evaluated all the same.
+        return let("_", e, indent)
+
+    def command_stmt(self, s: m.Command, indent: int) -> list[str]:
+        sub = self.ident(s.sub)
+        verb = self.design.controllers[s.sub].verbs[s.verb]
+        self.uses.add("types")
+        out = assign(f"self.out.{sub}.head.verb", "=", Atom(f"{s.sub}_VERB_{s.verb}"), indent)
+        for p, a in zip(verb.params, s.args):
+            out += assign(f"self.out.{sub}.args.{self.ident(s.verb)}.{self.ident(p.name)}", "=", self.expr(a), indent)
+        out += assign(f"self.send.{sub}", "=", Atom("true"), indent)
+        return out
+
+    def report_stmt(self, s: m.Report, indent: int) -> list[str]:
+        assert self.info is not None
+        self.uses.add("types")
+        return assign("self.status.head.status", "=", Atom(f"{self.info.c.name}_STATUS_{s.status}"), indent)
+
+    def if_stmt(self, s: m.If, indent: int) -> list[str]:
+        out: list[str] = []
+        branches = list(s.branches)
+        else_body = s.else_body
+        # `else { if ... }` with nothing else in the else block is an `else if` chain.
+        while len(else_body) == 1 and isinstance(else_body[0], m.If):
+            branches += else_body[0].branches
+            else_body = else_body[0].else_body
+        for i, (cond, body) in enumerate(branches):
+            out += if_open(self.expr(cond), indent, "if" if i == 0 else "} else if")
+            out += self.stmts(body, indent + 1)
+        if else_body:
+            out.append(f"{pad(indent)}}} else {{")
+            out += self.stmts(else_body, indent + 1)
+        out.append(f"{pad(indent)}}}")
+        return out
+
+
+def _bool_const(e: m.Expr):
+    if isinstance(e, m.Const) and e.type == BOOL and e.name is None:
+        return bool(e.value)
+    return None
