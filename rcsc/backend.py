@@ -128,6 +128,177 @@ def lower_controller(c: m.Controller) -> CtrlInfo:
     return CtrlInfo(c, states, rules, numbers, list(c.verbs), [u.name for u in c.subordinates], gm_uses, list(c.plans.values()))
 
 
+# ---- the layout of a plan's rules --------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class StateTest:
+    """`state == new` or `state == NAME` at the head of a rule."""
+
+    kind: str  # new | named
+    name: str | None = None
+
+
+@dataclass
+class RuleStep:
+    """One rule to emit: fire it when every one of `conds` holds (none: always)."""
+
+    rule: m.Rule
+    conds: list  # StateTest | m.Expr, and-ed in order
+
+
+@dataclass
+class Group:
+    """Rules that share a leading test, emitted as `if (test) { hoisted; items }`.
+
+    `hoist` lists (name, call) pairs: pure function calls that several
+    conditions of the group make, computed once at the top of the group.
+    """
+
+    test: object  # StateTest | m.Expr
+    hoist: list[tuple[str, m.Call]]
+    items: list  # RuleStep
+
+
+def expr_key(e) -> object:
+    """A hashable structural key of an expression (spans ignored), for finding repeats."""
+    if isinstance(e, m.Expr):
+        return (type(e).__name__,) + tuple(expr_key(getattr(e, f)) for f in e.__dataclass_fields__ if f not in ("span",))
+    if isinstance(e, list):
+        return tuple(expr_key(x) for x in e)
+    if isinstance(e, dict):
+        return tuple(sorted((k, expr_key(v)) for k, v in e.items()))
+    return e
+
+
+def impure_functions(design: m.Design) -> set[str]:
+    """Functions that call an extern, directly or through another function.
+
+    Externs may have effects (they are the user's code), so a call of one of
+    these is never moved or merged; every other function is pure and total.
+    """
+    calls = {f.name: {e.func for e in m.walk_expr(f.body) if isinstance(e, m.Call) and e.kind in ("fn", "extern")}
+             for f in design.functions.values() if f.body is not None}
+    impure = {f.name for f in design.functions.values() if f.extern}
+    changed = True
+    while changed:
+        changed = False
+        for name, callees in calls.items():
+            if name not in impure and callees & impure:
+                impure.add(name)
+                changed = True
+    return impure
+
+
+def plan_layout(plan: m.Plan, impure: set[str]) -> list:
+    """The rules of `plan` in evaluation order, grouped so that shared tests run once.
+
+    Evaluation order is the simulator's: guarded rules in order, then the
+    state's `otherwise` rules.  Consecutive rules of one state test the state
+    once (a Group); inside, consecutive rules whose conditions start with the
+    same part test it once (a nested Group), and a pure function call that
+    several of their conditions make is computed once (`hoist`).  Pure
+    functions are total and have no effects, so computing one earlier, or
+    when a short-circuit would have skipped it, changes no result.  A rule
+    that always fires ends the list: nothing after it can fire.
+    """
+    rules = [r for r in plan.rules if not r.otherwise] + [r for r in plan.rules if r.otherwise and r.state.kind != "any"]
+    steps: list[tuple[StateTest | None, list, m.Rule]] = []
+    for r in rules:
+        test = StateTest("new") if r.state.kind == "new" else StateTest("named", r.state.name) if r.state.kind == "named" else None
+        steps.append((test, _conjuncts(r.guard), r))
+        if test is None and not steps[-1][1]:
+            break
+    out: list = []
+    i = 0
+    while i < len(steps):
+        j = i + 1
+        while j < len(steps) and steps[i][0] is not None and steps[j][0] == steps[i][0]:
+            j += 1
+        if j - i > 1:
+            group = steps[i:j]
+            out.append(Group(steps[i][0], [], _until_always(_by_leading_part([(conds, r) for _, conds, r in group], impure))))
+        else:
+            test, conds, r = steps[i]
+            out.append(RuleStep(r, ([test] if test else []) + conds))
+        i = j
+    return out
+
+
+def tests_state(items: list) -> bool:
+    """Whether a layout reads the current state anywhere."""
+    for item in items:
+        parts = item.conds if isinstance(item, RuleStep) else [item.test]
+        if any(isinstance(p, StateTest) for p in parts):
+            return True
+        if isinstance(item, Group) and tests_state(item.items):
+            return True
+    return False
+
+
+def _until_always(items: list) -> list:
+    """Cut a group's items after one that always fires (the rest could never fire)."""
+    for n, item in enumerate(items):
+        if isinstance(item, RuleStep) and not item.conds:
+            return items[: n + 1]
+    return items
+
+
+def _conjuncts(guard: m.Expr | None) -> list:
+    out: list = []
+
+    def split(e: m.Expr) -> None:
+        if isinstance(e, m.Binary) and e.op == "and":
+            split(e.left)
+            split(e.right)
+        elif not (isinstance(e, m.Const) and e.value is True):
+            out.append(e)
+
+    if guard is not None:
+        split(guard)
+    return out
+
+
+def _by_leading_part(rules: list[tuple[list, m.Rule]], impure: set[str]) -> list:
+    out: list = []
+    i = 0
+    while i < len(rules):
+        first = expr_key(rules[i][0][0]) if rules[i][0] else None
+        j = i + 1
+        while first is not None and j < len(rules) and rules[j][0] and expr_key(rules[j][0][0]) == first:
+            j += 1
+        if j - i > 1:
+            inner = [(conds[1:], r) for conds, r in rules[i:j]]
+            out.append(Group(rules[i][0][0], _hoist(inner, impure), _until_always([RuleStep(r, conds) for conds, r in inner])))
+        else:
+            out.append(RuleStep(rules[i][1], rules[i][0]))
+        i = j
+    return out
+
+
+def _hoist(rules: list[tuple[list, m.Rule]], impure: set[str]) -> list[tuple[str, m.Call]]:
+    """Pure calls made by at least two of the rules' conditions (outermost only)."""
+    seen_in: dict[object, tuple[int, m.Call]] = {}
+    for conds, _ in rules:
+        keys = set()
+        for part in conds:
+            for e in m.walk_expr(part):
+                if isinstance(e, m.Call) and e.kind == "fn" and e.func not in impure:
+                    k = expr_key(e)
+                    if k not in keys:
+                        keys.add(k)
+                        n, _ = seen_in.get(k, (0, e))
+                        seen_in[k] = (n + 1, e)
+    chosen: list[tuple[str, m.Call]] = []
+    inside: set[object] = set()
+    for k, (n, e) in seen_in.items():  # walk order: outer calls come before their arguments
+        if n < 2 or k in inside:
+            continue
+        chosen.append((f"cse_{len(chosen) + 1}", e))
+        inside.update(expr_key(x) for x in m.walk_expr(e))
+    return chosen
+
+
 def schedule_of(design: m.Design, cpu: m.Cpu, options: BuildOptions) -> list[m.Controller]:
     ctrls = [design.controllers[u.name] for u in cpu.schedule]
     if options.exclude_simulators:

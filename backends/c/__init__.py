@@ -10,8 +10,12 @@ from __future__ import annotations
 
 from rcsc import model as m
 from rcsc.backend import (
-    CtrlInfo,
     OutFile,
+    RuleStep,
+    StateTest,
+    expr_key,
+    plan_layout,
+    tests_state,
     built_controllers,
     register,
     schedule_of,
@@ -176,113 +180,43 @@ class CBackend(CTarget):
 
     def plan(self, c: m.Controller, plan: m.Plan) -> dict:
         self.verb = plan.verb
-        # First match wins: guarded rules in order, then the state's `otherwise`.
-        rules = [r for r in plan.rules if not r.otherwise] + [r for r in plan.rules if r.otherwise and r.state.kind != "any"]
-        items = [(self.state_test(r), self.conjuncts(r), r) for r in rules]
-        body: list[str] = []
-        i = 0
-        while i < len(items):
-            # Consecutive rules of one state test the state once.
-            j = i + 1
-            while j < len(items) and items[i][0] is not None and items[j][0] == items[i][0]:
-                j += 1
-            group = items[i:j]
-            if len(group) > 1:
-                body.append(f"if ({group[0][0]}) {{")
-                body += ["    " + x for x in self.rule_group(plan, [(conj, r) for _, conj, r in group])]
-                body.append("}")
-            else:
-                test, conj, r = group[0]
-                body += self.rule_group(plan, [(([test] if test else []) + conj, r)])
-            i = j
+        layout = plan_layout(plan, self.impure)
         return {
             "fn": f"{c.name}_plan_{plan.verb}",
             "verb": plan.verb,
             "where": where(plan.span),
             "continuous": plan.continuous,
-            "needs_state": any(t is not None for t, _, _ in items),
-            "body": body,
+            "needs_state": tests_state(layout),
+            "body": self.layout(layout),
         }
 
-    def state_test(self, r: m.Rule) -> str | None:
-        if r.state.kind == "new":
-            return "state == ST_NEW"
-        if r.state.kind == "named":
-            return f"state == {_state_enum(r.state.name or '')}"
-        return None
-
-    def conjuncts(self, r: m.Rule) -> list[m.Expr]:
-        """The guard as a list of `and`-ed parts (empty: always true)."""
-        out: list[m.Expr] = []
-
-        def split(e: m.Expr) -> None:
-            if isinstance(e, m.Binary) and e.op == "and":
-                split(e.left)
-                split(e.right)
-            elif not (isinstance(e, m.Const) and e.value is True):
-                out.append(e)
-
-        if r.guard is not None:
-            split(r.guard)
-        return out
-
-    def rule_group(self, plan: m.Plan, rules: list[tuple[list, m.Rule]]) -> list[str]:
-        """Rules that share their state test: consecutive rules with the same
-        leading condition test it once, and a pure function call that several
-        of their conditions make is computed once (pure functions are total
-        and have no effects, so computing one early changes nothing)."""
+    def layout(self, items: list) -> list[str]:
         out: list[str] = []
-        i = 0
-        while i < len(rules):
-            first = self._text(rules[i][0][0]) if rules[i][0] and not isinstance(rules[i][0][0], str) else None
-            j = i + 1
-            while first is not None and j < len(rules) and rules[j][0] and not isinstance(rules[j][0][0], str) and self._text(rules[j][0][0]) == first:
-                j += 1
-            if j - i > 1:
-                inner = [(conj[1:], r) for conj, r in rules[i:j]]
-                out.append(f"if ({_strip_parens(first)}) {{")
-                out += ["    " + x for x in self.hoisted(inner)]
-                out.append("}")
-            else:
-                out += self.hoisted(rules[i:i + 1])
-            i = j
-        return out
-
-    def _text(self, e) -> str:
-        return e if isinstance(e, str) else self.expr(e)
-
-    def hoisted(self, rules: list[tuple[list, m.Rule]]) -> list[str]:
-        """Emit `rules`, computing repeated pure calls of their conditions first."""
-        counts: dict[str, tuple[int, m.Call]] = {}
-        for conj, _ in rules:
-            seen = set()
-            for part in conj:
-                if isinstance(part, str):
-                    continue
-                for e in m.walk_expr(part):
-                    if isinstance(e, m.Call) and e.kind == "fn" and e.func not in self.impure:
-                        text = self.expr(e)
-                        if text not in seen:
-                            seen.add(text)
-                            n, _ = counts.get(text, (0, e))
-                            counts[text] = (n + 1, e)
-        out: list[str] = []
-        saved = dict(self.cse)
-        for text, (n, e) in sorted(counts.items(), key=lambda kv: -len(kv[0])):
-            if n < 2 or any(text in t for t in self.cse if t != text):
+        for item in items:
+            if isinstance(item, RuleStep):
+                out += self.rule(item.conds, item.rule)
                 continue
-            name = f"cse_{len(self.cse) + 1}"
-            out.append(f"const {self.ctype(e.type)} {name} = {self.expr(e)};")
-            self.cse[text] = name
-        for conj, r in rules:
-            out += self.rule(conj, r)
-        self.cse = saved
+            out.append(f"if ({_strip_parens(self.cond_part(item.test))}) {{")
+            saved = dict(self.cse)
+            for name, call in item.hoist:
+                out.append(f"    const {self.ctype(call.type)} {name} = {self.expr(call)};")
+                self.cse[expr_key(call)] = name
+            out += ["    " + x for x in self.layout(item.items)]
+            self.cse = saved
+            out.append("}")
         return out
+
+    def cond_part(self, part) -> str:
+        if isinstance(part, StateTest):
+            return "state == ST_NEW" if part.kind == "new" else f"state == {_state_enum(part.name or '')}"
+        return self.expr(part)
 
     def rule(self, conj: list, r: m.Rule) -> list[str]:
         plan_verb = self.verb
         own = self.own()
-        parts = [f"({t})" if isinstance(t, str) and len(conj) > 1 else self._text(t) for t in conj]
+        parts = [self.cond_part(t) for t in conj]
+        if len(parts) > 1:
+            parts = [f"({t})" if isinstance(c, StateTest) else t for t, c in zip(parts, conj)]
         cond = _strip_parens(parts[0]) if len(parts) == 1 else " && ".join(parts)
         saved, self.cse = self.cse, {}  # jobs run after the condition: no stale values
         reports = any(isinstance(s, m.Report) for s in r.jobs)

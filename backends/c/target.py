@@ -18,7 +18,7 @@ import math
 import re
 
 from rcsc import model as m
-from rcsc.backend import BuildOptions, CtrlInfo, Target, lower_controller
+from rcsc.backend import BuildOptions, CtrlInfo, Target, expr_key, impure_functions, lower_controller
 from rcsc.types import BOOL, DURATION, F64, I32, I64, U32, EnumType, FloatType, IntType, RecordType, Type
 
 C_KEYWORDS = frozenset(
@@ -53,8 +53,8 @@ class CTarget(Target):
         self.info: CtrlInfo | None = None
         self.verb: str | None = None
         self.infos = {name: lower_controller(c) for name, c in design.controllers.items()}
-        # Common guard subexpressions of the rules being emitted: call text -> local name.
-        self.cse: dict[str, str] = {}
+        # Pure calls computed once for the conditions being emitted: expr_key -> local name.
+        self.cse: dict[object, str] = {}
         self.impure = impure_functions(design)
 
     # ---- names and types ---------------------------------------------------------
@@ -203,8 +203,8 @@ class CTarget(Target):
     def call_expr(self, e: m.Call) -> str:
         args = [self.expr(a) for a in e.args]
         if e.kind in ("fn", "extern"):
-            text = f"{self.p}_{e.func}({', '.join(args)})"
-            return self.cse.get(text, text)
+            name = self.cse.get(expr_key(e))
+            return name if name is not None else f"{self.p}_{e.func}({', '.join(args)})"
         if e.kind == "record":
             return f"(({self.ctype(e.type)}){{{', '.join(args)}}})"
         if e.kind == "convert":
@@ -276,25 +276,6 @@ class CTarget(Target):
             out.extend(self.stmts(s.else_body, indent + 1))
         out.append(f"{pad}}}")
         return out
-
-
-def impure_functions(design: m.Design) -> set[str]:
-    """Functions that call an extern, directly or through another function.
-
-    Externs may have effects (they are the user's code), so a call of one
-    of these is never moved or merged; every other function is pure and total.
-    """
-    calls = {f.name: {e.func for e in m.walk_expr(f.body) if isinstance(e, m.Call) and e.kind in ("fn", "extern")}
-             for f in design.functions.values() if f.body is not None}
-    impure = {f.name for f in design.functions.values() if f.extern}
-    changed = True
-    while changed:
-        changed = False
-        for name, callees in calls.items():
-            if name not in impure and callees & impure:
-                impure.add(name)
-                changed = True
-    return impure
 
 
 def _strip_parens(text: str) -> str:
