@@ -374,7 +374,10 @@ class Target:
     # ---- dispatch ------------------------------------------------------------------
 
     def expr(self, e: m.Expr) -> str:
-        """The target's text for an expression: `<node>_expr` of the node's class."""
+        """The target's form of an expression: `<node>_expr` of the node's class.
+
+        C returns text; a target may return a layout tree whose str() is the
+        text (Rust does, to break long lines the way rustfmt does)."""
         method = getattr(self, f"{type(e).__name__.lower()}_expr", None)
         if method is None:
             raise NotImplementedError(f"{self.name}: no {type(e).__name__.lower()}_expr")
