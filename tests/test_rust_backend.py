@@ -223,6 +223,133 @@ def test_a_minimal_design_builds_clean(builds: Builds, tmp_path: Path) -> None:
     assert _run(exe, tmp_path / "go.scn", tmp_path) == reference_trace(design, tmp_path / "go.scn")
 
 
+def test_controller_works_in_the_buffers_with_the_shared_rule_layout(tmp_path: Path) -> None:
+    """As the C target: the command, the subordinates' status, Global Memory and the
+    own status are read and written in place (no copies in the controller), commands
+    are written into the subordinate's buffer and made new by the serial at the write
+    phase, `plan == 0` is idle, and the plans follow rcsc.backend.plan_layout."""
+    generate(SUBMARINE, "rust", tmp_path)
+    pr = (tmp_path / "src/ctrl_PR.rs").read_text(encoding="utf-8")
+    struct = pr[pr.index("pub struct PR {"):pr.index("impl PR {")]
+    assert re.findall(r"pub (\w+):", struct) == ["sent", "send", "loc", "plan", "entry_cycle", "steps"]
+    for copy in ("self.cmd", "self.status", "self.sub", "self.gm", "self.out", "self.idle"):
+        assert copy not in pr, copy
+    ahead = pr[pr.index("fn plan_AHEAD("):pr.index("fn plan_ASTERN(")]
+    assert "let state = buf.PR_status.head.state;" in ahead
+    # E2..E4 share `state == S1` and `TB.done`, tested once, and their speed_status(...) call.
+    assert ahead.count("if state == Self::S_S1 {") == 1
+    assert ahead.count("sub_done(&buf.TB_status.head, self.sent.TB)") == 2  # the S1 group and E5
+    code = "\n".join(ln for ln in ahead.splitlines() if not ln.lstrip().startswith("//"))
+    assert code.count("speed_status(") == 1 and "let cse_1 = speed_status(" in code
+    assert [ln.strip() for ln in ahead.splitlines() if "cse_1 ==" in ln] == [
+        "if cse_1 == SpeedStatus::BELOW {", "if cse_1 == SpeedStatus::AT {", "if cse_1 == SpeedStatus::ABOVE {"]
+    # No EXEC store that the rule overwrites (E9 ends in error, E3 reports AT_GOAL).
+    for label, stores_exec in (("E0", True), ("E9", False), ("E3", False), ("E5", True)):
+        rule = ahead[ahead.index(f"// {label} "):]
+        rule = rule[:rule.index("Self::RULE_AHEAD_")]
+        assert ("buf.PR_status.head.status = num::EXEC;" in rule) == stores_exec, label
+    assert "buf.TB_cmd.head.verb = TB_VERB_AHEAD;" in ahead and "buf.TB_cmd.args.AHEAD.rpm = self.loc.prop_rpm;" in ahead
+    assert ahead.count("self.plan = 0;") == 1  # E9, the only rule that ends the plan
+    step = pr[pr.index("pub fn step("):]
+    assert "buf.TB_cmd.head.serial = self.sent.TB;" in step and "buf.PR_status = " not in step and "buf.TB_cmd = " not in step
+    assert "match self.plan {" in step and "_ => {}" in step
+
+
+# Every shape of rcsc.backend.plan_layout: groups by state and by a shared leading
+# condition, hoisted calls (cse_1) in a group that returns and in one that ends the
+# plan, a rule that always fires inside a group (C2) and at the end of the plan
+# (the `*` rule S2), reports, done and error.
+LAYOUTS = """design layouts
+
+fn twice(x: i32) -> i32 = x * 2
+fn band(x: i32) -> i32 = if x < 0 then 0 else if x < 10 then 1 else 2
+
+const LIMIT: i32 = 20
+
+gm margin: i32 = 100 from env
+
+controller TOP level 2 budget 1 ms {
+    verb RUN(n: i32)
+    verb SPIN
+    subordinates LOW
+    reports HIGH
+
+    status count: i32 = 0
+    local spins: i32 = 0
+
+    plan RUN ordered {
+        R0: cmd.n > 0 | new -> COUNT | count = 0, LOW.GO(k = cmd.n);
+        R1: true | new -> error(1);
+        R9: LOW.error | * -> error(2);
+        C0: band(count) == 1 and twice(count) < 6 | COUNT -> COUNT | count += 1;
+        C1: band(count) == 1 and twice(count) < 12 | COUNT -> COUNT | count += 2, report HIGH;
+        C2: true | COUNT -> WAIT | LOW.GO(k = count);
+        W0: LOW.done and twice(count) > LIMIT | WAIT -> done;
+        W1: LOW.done and twice(count) <= LIMIT | WAIT -> COUNT | count += 5;
+    }
+
+    plan SPIN ordered {
+        S0: true | new -> SPINNING | spins = 0;
+        S1: spins >= 5 | SPINNING -> done;
+        S2: true | * -> SPINNING | spins += 1;
+    }
+}
+
+controller LOW level 1 budget 1 ms {
+    verb GO(k: i32)
+    reads margin
+    local left: i32 = 0
+
+    plan GO {
+        G0: true | new -> RUNNING | left = cmd.k;
+        G1: left <= 0 | RUNNING -> done;
+        G2: left > margin | RUNNING -> error(5);
+        G3: otherwise | RUNNING -> RUNNING | left -= 1;
+    }
+}
+
+cpu MAIN {
+    heartbeat 10 ms
+    schedule TOP, LOW
+}
+"""
+
+LAYOUTS_SCENARIO = """scenario "layouts"
+cycles 90
+at 2: TOP.RUN(n = 3)
+at 45: TOP.SPIN()
+at 55: TOP.RUN(n = 0)
+at 60: TOP.RUN(n = 200)
+"""
+
+
+def test_rule_layouts_build_clean_and_conform(builds: Builds, tmp_path: Path) -> None:
+    design, scn = tmp_path / "layouts.rcs", tmp_path / "layouts.scn"
+    design.write_text(LAYOUTS, encoding="utf-8")
+    scn.write_text(LAYOUTS_SCENARIO, encoding="utf-8")
+    crate = builds.source(design, "rust")
+    top = (crate / "src/ctrl_TOP.rs").read_text(encoding="utf-8")
+    assert top.count("let cse_1 = twice(buf.TOP_status.f.count);") == 2
+    # The plan's last rule has no `return;` (clippy::needless_return); clippy below also
+    # rejects code after a rule that always fires (unreachable code).
+    for fn in ("plan_RUN", "plan_SPIN"):
+        body = top[top.index(f"fn {fn}("):]
+        body = body[:body.index("\n    }\n")]
+        assert not body.rstrip("} \n").endswith("return;"), fn
+    files = sorted(str(p) for p in crate.rglob("*.rs") if "target" not in p.parts)
+    proc = subprocess.run(["rustfmt", "--check", "--edition", "2021", *files], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stdout[-6000:]
+    env = builds.cargo_env(design)
+    proc = subprocess.run(["cargo", "clippy", "--offline", "--all-targets", "--", "-D", "warnings"], cwd=crate, env=env, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    expected = reference_trace(design, scn)
+    for profile in RUST_PROFILES:
+        got = _run(builds.rust_binary(design, profile), scn, tmp_path)
+        assert got == expected, first_difference(expected, got)
+    c = _run(builds.c_binary(design, "gcc-O2"), scn, tmp_path)
+    assert c == expected, first_difference(expected, c)
+
+
 def test_targets_lists_c_and_rust(capsys) -> None:
     from rcsc import cli
 
@@ -239,9 +366,9 @@ def test_layout_equals_rustfmt_on_random_statements(tmp_path: Path) -> None:
     random expressions in every statement form and compare with rustfmt."""
     from rcsc.backends.rust import fmt as f
 
-    names = ["x", "DT", "self.loc.prop_rpm", "self.cmd.args.AHEAD.speed", "MAX_AHEAD_RPM", "ShipDir::AHEAD",
+    names = ["x", "DT", "self.loc.prop_rpm", "buf.PR_cmd.args.AHEAD.speed", "MAX_AHEAD_RPM", "ShipDir::AHEAD",
              "num::EXEC", "self.loc.a_rather_long_local_variable_name", "f64::NAN", "1.0", "-2.5", "10", "1e-05",
-             "self.sub.WORKER.f.reached_position_in_millimetres_along_the_track"]
+             "buf.WORKER_status.f.reached_position_in_millimetres_along_the_track", "cse_1"]
     fns = ["clamp", "num::fabs", "i32::wrapping_add", "speed_status", "ramp_toward", "Externs::path_length",
            "a_function_with_a_long_name"]
     ops = ["+", "-", "*", "/", "==", "<", ">=", "&&", "||"]
@@ -269,7 +396,7 @@ def test_layout_equals_rustfmt_on_random_statements(tmp_path: Path) -> None:
         e = expr(r, r.choice([2, 3, 4, 5]))
         kind = i % 4
         if kind == 0:
-            body = f.assign("self.out.TB.args.AHEAD.rpm", "=", e, indent)
+            body = f.assign("buf.TB_cmd.args.AHEAD.rpm", "=", e, indent)
         elif kind == 1:
             body = f.if_open(e, indent) + [f.pad(indent + 1) + "return;", f.pad(indent) + "}"]
         elif kind == 2:

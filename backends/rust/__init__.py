@@ -23,8 +23,8 @@ from __future__ import annotations
 from importlib import resources
 
 from rcsc import model as m
-from rcsc.backend import CtrlInfo, OutFile, built_controllers, register, schedule_of, where
-from rcsc.backends.rust.fmt import Atom, Bin, Call, Struct, arm, assign, field_decl, fn_head, if_open, pad, tail
+from rcsc.backend import OutFile, RuleStep, StateTest, built_controllers, expr_key, plan_layout, register, schedule_of, tests_state, where
+from rcsc.backends.rust.fmt import Atom, Bin, Call, Node, Struct, arm, assign, expr_stmt, field_decl, fn_head, if_open, let, pad, tail
 from rcsc.backends.rust.target import RustTarget, rust_comment
 from rcsc.types import I32, EnumType, RecordType, Type
 
@@ -250,20 +250,15 @@ class RustBackend(RustTarget):
         self.begin()
         self.uses.update(("num", "types"))
         me = self.tname(c.name)
-        subs = [{"name": s, "member": self.ident(s), "status_type": f"{s}_status", "cmd_type": f"{s}_cmd",
-                 "status_decl": field_decl(f"pub {self.ident(s)}: {s}_status", 1), "cmd_decl": field_decl(f"pub {self.ident(s)}: {s}_cmd", 1)} for s in info.subs]
-        gm = [{"decl": field_decl(f"pub {self.ident(n)}: {self.rtype(self.design.gm[n].type)}", 1), "member": self.ident(n)} for n in info.gm_uses]
-        writes = [self.ident(u.name) for u in c.writes]
+        own, cmd = self.own(), f"buf.{c.name}_cmd"
+        subs = [{"name": s, "member": self.ident(s)} for s in info.subs]
         locals_ = [x for v in c.locals.values() for x in field_decl(f"pub {self.ident(v.name)}: {self.rtype(v.type)}", 1)]
-        init: list[tuple[str, object]] = [("cmd", Call("Default::default")), ("status", Atom(f"{c.name}_status::INIT"))]
+        init: list[tuple[str, object]] = []
         if subs:
-            init.append(("sub", Struct("Subs", [(s["member"], Atom(f"{s['status_type']}::INIT")) for s in subs])))
-            init += [("sent", Call("Default::default")), ("out", Call("Default::default")), ("send", Call("Default::default"))]
-        if gm:
-            init.append(("gm", Call("Default::default")))
+            init += [("sent", Call("Default::default")), ("send", Call("Default::default"))]
         if c.locals:
             init.append(("loc", Struct("Locals", [(self.ident(n), self.init_value(v)) for n, v in c.locals.items()])))
-        init += [("plan", Atom("0")), ("idle", Atom("true")), ("entry_cycle", Atom("0")), ("steps", Atom("0"))]
+        init += [("plan", Atom("0")), ("entry_cycle", Atom("0")), ("steps", Atom("0"))]
         new_body = tail(Struct(me, init), 2)  # type: ignore[arg-type]
 
         pre = self.stmts(c.pre, 2)
@@ -271,23 +266,49 @@ class RustBackend(RustTarget):
         plans = [self.plan(c, plan) for plan in c.plans.values()]
         step_ext = "ext" in self.uses
         self.step_uses_ext[c.name] = step_ext
-        decide = []
-        for p in plans:
-            args = ", ".join((["ext"] if p["ext"] else []) + (["cycle"] if p["cycle"] else []))
-            decide += arm(f"{c.name}_VERB_{p['verb']}", Atom(f"self.{p['fn']}({args})"), 4)
+        # New command: a new serial supersedes whatever ran before; the plan of its
+        # verb runs, a verb without a plan is an error.
+        head = f"{own}.head"
+        new_command = if_open(Bin.make("!=", Atom(f"{cmd}.head.serial"), Atom(f"{head}.echo_serial")), 2)
+        new_command += let("verb", Atom(f"{cmd}.head.verb"), 3)
+        new_command += assign(f"{head}.echo_serial", "=", Atom(f"{cmd}.head.serial"), 3)
+        for field, value in (("status", "num::EXEC"), ("verb", "verb"), ("state", "Self::ST_NEW"), ("rule", "0"), ("error_code", "0")):
+            new_command += assign(f"{head}.{field}", "=", Atom(value), 3)
+        new_command += assign("self.entry_cycle", "=", Atom("cycle"), 3)
+        if plans:
+            new_command.append(f"{pad(3)}self.plan = match verb {{")
+            for p in plans:
+                new_command += arm(f"{c.name}_VERB_{p['verb']}", Atom(f"{c.name}_VERB_{p['verb']}"), 4)
+            new_command += [f"{pad(4)}_ => {{"] + assign(f"{head}.status", "=", Atom("num::ERROR"), 5) + [f"{pad(5)}0", f"{pad(4)}}}", f"{pad(3)}}};"]
+        else:
+            new_command.append(f"{pad(3)}// {c.name} has no plans: every command is answered with ERROR.")
+            new_command += assign(f"{head}.status", "=", Atom("num::ERROR"), 3)
+        new_command.append(f"{pad(2)}}}")
+        # Write: the commands issued in this step become new with their serial.
+        write = assign(f"{head}.stamp", "=", Atom("cycle"), 2)
+        for s in subs:
+            sent = f"self.sent.{s['member']}"
+            write += if_open(Atom(f"self.send.{s['member']}"), 2)
+            write += assign(sent, "=", Call("num::next_serial", [Atom(sent)]), 3)
+            write += assign(f"buf.{s['name']}_cmd.head.serial", "=", Atom(sent), 3)
+            write.append(f"{pad(2)}}}")
+        calls = [(f"{c.name}_VERB_{p['verb']}", Atom(f"self.{p['fn']}({', '.join(['buf'] + (['ext'] if p['ext'] else []) + (['cycle'] if p['cycle'] else []))})"))
+                 for p in plans]
+        if len(calls) == 1:  # clippy::single_match: one plan is an `if`
+            decide = if_open(Bin.make("==", Atom("self.plan"), Atom(calls[0][0])), 2) + expr_stmt(calls[0][1], 3) + [f"{pad(2)}}}"]
+        else:
+            decide = [f"{pad(2)}match self.plan {{"] + [x for verb, call in calls for x in arm(verb, call, 3)] + [f"{pad(3)}_ => {{}}", f"{pad(2)}}}"]
         params = ["&mut self", "buf: &mut Buffers"] + (["ext: &impl Externs"] if step_ext else []) + ["cycle: u64"]
         self.verb = None
         ctx = {
             "name": c.name, "type": me,
             "kind": "simulator" if c.simulator else "controller", "level": c.level, "where": where(c.span),
             "budget_ns": c.budget_ns,
-            "cmd_type": f"{c.name}_cmd", "status_type": f"{c.name}_status",
-            "member": self.ident(c.name),
-            "subs": subs, "gm": gm, "writes": writes, "locals": locals_,
+            "subs": subs, "locals": locals_,
             "new_body": new_body,
             "states": [{"name": self.state_const(s), "number": i} for i, s in enumerate(info.states)],
             "rules": [{"name": self.rule_const(plan.verb, r.label), "number": info.rule_number[(plan.verb, r.index)]} for plan in c.plans.values() for r in plan.rules],
-            "plans": plans, "decide": decide,
+            "plans": plans, "new_command": new_command, "decide": decide, "write": write,
             "pre": pre, "post": post,
             "step_head": fn_head(1, "pub ", "step", params, None),
             "imports": self.imports(self.uses),
@@ -296,36 +317,17 @@ class RustBackend(RustTarget):
         return ctx
 
     def plan(self, c: m.Controller, plan: m.Plan) -> dict:
-        info = self.infos[c.name]
         self.verb = plan.verb
         outer_uses = self.uses
         self.uses = set()
-        guarded = [r for r in plan.rules if not r.otherwise]
-        fallbacks = [r for r in plan.rules if r.otherwise and r.state.kind != "any"]
-        rules = []
-        for r in guarded + fallbacks:
-            rule = self.rule(info, plan, r)
-            rules.append(rule)
-            if not rule["cond"]:
-                break  # the rules after one that always fires can never fire
+        layout = plan_layout(plan, self.impure)
         body: list[str] = []
-        needs_state = any(r["tests_state"] for r in rules)
-        if needs_state:
-            body.append(f"{pad(2)}let state = self.status.head.state;")
-        for i, rule in enumerate(rules):
-            last = i == len(rules) - 1
-            body += [f"{pad(2)}// {rule['comment']}"]
-            if rule["cond"] is None:
-                body += rule["body"]
-            else:
-                body += if_open(rule["cond"], 2)
-                body += rule["body"]
-                if not last:
-                    body.append(f"{pad(3)}return;")
-                body.append(f"{pad(2)}}}")
+        if tests_state(layout):
+            body += let("state", Atom(f"{self.own()}.head.state"), 2)
+        body += self.layout(layout, 2, True)
         uses = self.uses
         self.uses = outer_uses | uses
-        params = ["&mut self"] + (["ext: &impl Externs"] if "ext" in uses else []) + (["cycle: u64"] if "cycle" in uses else [])
+        params = ["&mut self", "buf: &mut Buffers"] + (["ext: &impl Externs"] if "ext" in uses else []) + (["cycle: u64"] if "cycle" in uses else [])
         return {
             "fn": f"plan_{plan.verb}",
             "verb": plan.verb,
@@ -336,25 +338,45 @@ class RustBackend(RustTarget):
             "cycle": "cycle" in uses,
         }
 
-    def rule(self, info: CtrlInfo, plan: m.Plan, r: m.Rule) -> dict:
-        tests: list = []
-        tests_state = False
-        if r.state.kind == "new":
-            tests.append(Bin.make("==", Atom("state"), Atom("Self::ST_NEW")))
-            tests_state = True
-        elif r.state.kind == "named":
-            tests.append(Bin.make("==", Atom("state"), Atom(f"Self::{self.state_const(r.state.name or '')}")))
-            tests_state = True
-        if r.guard is not None and not (isinstance(r.guard, m.Const) and r.guard.value is True):
-            tests.append(self.expr(r.guard))
+    def layout(self, items: list, indent: int, last: bool) -> list[str]:
+        """The lines of a plan's rule layout; `last`: it ends the function (no `return;`
+        after its final rule, clippy::needless_return)."""
+        out: list[str] = []
+        for n, item in enumerate(items):
+            end = last and n == len(items) - 1
+            if isinstance(item, RuleStep):
+                out += self.rule(item.conds, item.rule, indent, end)
+                continue
+            out += if_open(self.cond_part(item.test), indent)
+            saved = dict(self.cse)
+            for name, call in item.hoist:
+                out += let(name, self.expr(call), indent + 1)
+                self.cse[expr_key(call)] = name
+            out += self.layout(item.items, indent + 1, end)
+            self.cse = saved
+            out.append(f"{pad(indent)}}}")
+        return out
+
+    def cond_part(self, part) -> Node:
+        if isinstance(part, StateTest):
+            return Bin.make("==", Atom("state"), Atom(f"Self::{self.state_const('new' if part.kind == 'new' else part.name or '')}"))
+        return self.expr(part)
+
+    def rule(self, conds: list, r: m.Rule, indent: int, last: bool) -> list[str]:
+        assert self.verb is not None
+        own = self.own()
         cond = None
-        for t in tests:
+        for part in conds:
+            t = self.cond_part(part)
             cond = t if cond is None else Bin.make("&&", cond, t)
-        guard_text = "otherwise" if r.guard is None else rust_comment(r.guard_span.text)
-        ind = 3 if cond is not None else 2
-        body = assign("self.status.head.status", "=", Atom("num::EXEC"), ind)
-        body += assign("self.status.head.rule", "=", Atom(f"Self::{self.rule_const(plan.verb, r.label)}"), ind)
+        ind = indent + 1 if cond is not None else indent
+        saved, self.cse = self.cse, {}  # jobs run after the condition: no stale values
+        # EXEC unless the rule's own status (done, error, a report) overwrites it.
+        reports = any(isinstance(s, m.Report) for s in r.jobs)
+        body = [] if r.next.kind in ("done", "error") or reports else assign(f"{own}.head.status", "=", Atom("num::EXEC"), ind)
+        body += assign(f"{own}.head.rule", "=", Atom(f"Self::{self.rule_const(self.verb, r.label)}"), ind)
         body += self.stmts(r.jobs, ind)
+        self.cse = saved
         nxt = r.next
         if nxt.kind == "named":
             target = f"Self::{self.state_const(nxt.name or '')}"
@@ -362,29 +384,30 @@ class RustBackend(RustTarget):
                 pass  # a self-loop keeps the time in state running
             elif r.state.kind == "any":
                 self.uses.add("cycle")
-                body += if_open(Bin.make("!=", Atom("self.status.head.state"), Atom(target)), ind)
-                body += assign("self.status.head.state", "=", Atom(target), ind + 1)
+                body += if_open(Bin.make("!=", Atom(f"{own}.head.state"), Atom(target)), ind)
+                body += assign(f"{own}.head.state", "=", Atom(target), ind + 1)
                 body += assign("self.entry_cycle", "=", Atom("cycle"), ind + 1)
                 body.append(f"{pad(ind)}}}")
             else:
                 self.uses.add("cycle")
-                body += assign("self.status.head.state", "=", Atom(target), ind)
+                body += assign(f"{own}.head.state", "=", Atom(target), ind)
                 body += assign("self.entry_cycle", "=", Atom("cycle"), ind)
         elif nxt.kind == "done":
-            body += assign("self.status.head.status", "=", Atom("num::DONE"), ind)
-            body += assign("self.status.head.state", "=", Atom("Self::ST_DONE"), ind)
-            body += assign("self.idle", "=", Atom("true"), ind)
+            body += assign(f"{own}.head.status", "=", Atom("num::DONE"), ind)
+            body += assign(f"{own}.head.state", "=", Atom("Self::ST_DONE"), ind)
+            body += assign("self.plan", "=", Atom("0"), ind)
         elif nxt.kind == "error":
-            body += assign("self.status.head.status", "=", Atom("num::ERROR"), ind)
-            body += assign("self.status.head.error_code", "=", self.literal(nxt.code, I32), ind)
-            body += assign("self.status.head.state", "=", Atom("Self::ST_ERROR"), ind)
-            body += assign("self.idle", "=", Atom("true"), ind)
-        return {
-            "comment": f"{r.label} ({where(r.span)}): {guard_text} | {r.state} -> {nxt}",
-            "cond": cond,
-            "tests_state": tests_state,
-            "body": body,
-        }
+            body += assign(f"{own}.head.status", "=", Atom("num::ERROR"), ind)
+            body += assign(f"{own}.head.error_code", "=", self.literal(nxt.code, I32), ind)
+            body += assign(f"{own}.head.state", "=", Atom("Self::ST_ERROR"), ind)
+            body += assign("self.plan", "=", Atom("0"), ind)
+        if not last:
+            body.append(f"{pad(ind)}return;")
+        guard_text = "otherwise" if r.guard is None else rust_comment(r.guard_span.text)
+        comment = f"{pad(indent)}// {r.label} ({where(r.span)}): {guard_text} | {r.state} -> {nxt}"
+        if cond is None:
+            return [comment] + body
+        return [comment] + if_open(cond, indent) + body + [f"{pad(indent)}}}"]
 
 
 def _mod_key(name: str) -> tuple:

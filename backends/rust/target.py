@@ -24,7 +24,7 @@ import math
 import re
 
 from rcsc import model as m
-from rcsc.backend import BuildOptions, CtrlInfo, Target, lower_controller
+from rcsc.backend import BuildOptions, CtrlInfo, Target, expr_key, impure_functions, lower_controller
 from rcsc.backends.rust.fmt import (
     P_POSTFIX,
     P_UNARY,
@@ -54,17 +54,17 @@ RUST_KEYWORDS = frozenset(
 # Names the generated code defines or uses beside the design's, per namespace:
 # a design name that equals one (or matches a pattern of them) gets a trailing `_`.
 TYPE_RESERVED = frozenset(
-    "Buffers Gm StatusHead CommandHead Subs Sent Out Sending GmCopy Locals Externs ExternsImpl NoExterns Io Main "
+    "Buffers Gm StatusHead CommandHead Sent Sending Locals Externs ExternsImpl NoExterns Io Main "
     "num core std alloc types functions host io Option Result Default Clone Copy Debug PartialEq Eq Send Sync "
     "Sized Drop Fn FnMut FnOnce Vec String Box Value Kind TypeDesc FieldDesc VerbDesc ConstDesc GmDesc CtrlDesc "
     "DesignDesc StatusView HostDesign".split()
 )
 _TYPE_PATTERN = re.compile(r"_(cmd|status|fields|args)$|^ctrl_")
 VALUE_RESERVED = frozenset(
-    "sub_done sub_error sub_executing sub_status state cycle ext buf main name index status_none "
+    "sub_done sub_error sub_executing sub_status state verb cycle ext buf main name index status_none "
     "TYPES CONSTS GM CTRLS DESIGN Some None Ok Err field_desc const_desc gm_desc verb_desc".split()
 )
-_VALUE_PATTERN = re.compile(r"_VERB_|_STATUS_|_PERIOD_NS$|_STATES$|_RULES$|_of$|_value$|^T_|^status_")
+_VALUE_PATTERN = re.compile(r"_VERB_|_STATUS_|_PERIOD_NS$|_STATES$|_RULES$|_of$|_value$|^T_|^status_|^cse_\d+$")
 
 INT_NAME = {"i32": "i32", "i64": "i64", "u32": "u32", "duration": "i64"}
 WRAPPING = {"+": "wrapping_add", "-": "wrapping_sub", "*": "wrapping_mul"}
@@ -108,6 +108,9 @@ class RustTarget(Target):
         # "functions", "ext", "cycle".
         self.uses: set[str] = set()
         self._globals = set(design.consts) | set(design.enums) | set(design.records) | set(design.functions)
+        # Pure calls computed once for the conditions being emitted: expr_key -> local name.
+        self.cse: dict[object, str] = {}
+        self.impure = impure_functions(design)
 
     def begin(self) -> None:
         self.uses = set()
@@ -215,17 +218,22 @@ class RustTarget(Target):
             self.uses.add("types")
         return self.literal(e.value, e.type)
 
+    def own(self) -> str:
+        """The controller's own status buffer (it lives in the CPU's buffers)."""
+        assert self.info is not None
+        return f"buf.{self.info.c.name}_status"
+
     def ref_expr(self, e: m.Ref) -> Node:
         name = self.ident(e.name)
         if e.kind == "gm":
-            return Atom(f"self.gm.{name}")
+            return Atom(f"buf.gm.{name}")
         if e.kind == "local":
             return Atom(f"self.loc.{name}")
         if e.kind == "status":
-            return Atom(f"self.status.f.{name}")
+            return Atom(f"{self.own()}.f.{name}")
         if e.kind == "param":
-            assert self.verb is not None, "a command parameter outside a plan"
-            return Atom(f"self.cmd.args.{self.ident(self.verb)}.{name}")
+            assert self.info is not None and self.verb is not None, "a command parameter outside a plan"
+            return Atom(f"buf.{self.info.c.name}_cmd.args.{self.ident(self.verb)}.{name}")
         return Atom(self.param(e.name))  # a function's parameter
 
     def _period(self) -> str:
@@ -239,8 +247,8 @@ class RustTarget(Target):
 
     def subview_expr(self, e: m.SubView) -> Node:
         assert self.info is not None
-        sub = self.ident(e.sub)
-        head, sent = Unary("&", Atom(f"self.sub.{sub}.head")), Atom(f"self.sent.{sub}")
+        status = f"buf.{e.sub}_status"
+        head, sent = Unary("&", Atom(f"{status}.head")), Atom(f"self.sent.{self.ident(e.sub)}")
         if e.attr in ("done", "error", "executing"):
             self.uses.add("types")
             return Call(f"sub_{e.attr}", [head, sent])
@@ -248,12 +256,12 @@ class RustTarget(Target):
             self.uses.add("types")
             return Call("sub_status", [head, sent, Atom(f"{e.sub}_STATUS_{e.value}")])
         if e.attr == "error_code":
-            return Atom(f"self.sub.{sub}.head.error_code")
+            return Atom(f"{status}.head.error_code")
         if e.attr == "age":
             self.uses.update(("num", "cycle"))
-            return Call("num::cycles_ns", [Atom("cycle"), Atom(f"self.sub.{sub}.head.stamp"), Atom(self._period())])
+            return Call("num::cycles_ns", [Atom("cycle"), Atom(f"{status}.head.stamp"), Atom(self._period())])
         if e.attr == "field":
-            return Atom(f"self.sub.{sub}.f.{self.ident(e.value or '')}")
+            return Atom(f"{status}.f.{self.ident(e.value or '')}")
         raise ValueError(e.attr)
 
     def field_expr(self, e: m.Field) -> Node:
@@ -296,6 +304,8 @@ class RustTarget(Target):
         return If(self.expr(e.cond), self.expr(e.then), self.expr(e.else_))
 
     def call_expr(self, e: m.Call) -> Node:
+        if e.kind in ("fn", "extern") and expr_key(e) in self.cse:
+            return Atom(self.cse[expr_key(e)])
         args = [self.expr(a) for a in e.args]
         if e.kind == "fn":
             self.uses.add("functions")
@@ -335,7 +345,7 @@ class RustTarget(Target):
     # ---- statements ----------------------------------------------------------------
 
     def lvalue(self, lv: m.LValue) -> str:
-        base = {"gm": "self.gm", "local": "self.loc", "status": "self.status.f"}[lv.kind]
+        base = {"gm": "buf.gm", "local": "self.loc", "status": f"{self.own()}.f"}[lv.kind]
         return ".".join([base, self.ident(lv.name)] + [self.ident(p) for p in lv.path])
 
     def assign_stmt(self, s: m.Assign, indent: int) -> list[str]:
@@ -360,16 +370,18 @@ class RustTarget(Target):
         sub = self.ident(s.sub)
         verb = self.design.controllers[s.sub].verbs[s.verb]
         self.uses.add("types")
-        out = assign(f"self.out.{sub}.head.verb", "=", Atom(f"{s.sub}_VERB_{s.verb}"), indent)
+        # Written in place: nothing else runs during this step, and the serial
+        # that makes the command new is set at the write phase.
+        out = assign(f"buf.{s.sub}_cmd.head.verb", "=", Atom(f"{s.sub}_VERB_{s.verb}"), indent)
         for p, a in zip(verb.params, s.args):
-            out += assign(f"self.out.{sub}.args.{self.ident(s.verb)}.{self.ident(p.name)}", "=", self.expr(a), indent)
+            out += assign(f"buf.{s.sub}_cmd.args.{self.ident(s.verb)}.{self.ident(p.name)}", "=", self.expr(a), indent)
         out += assign(f"self.send.{sub}", "=", Atom("true"), indent)
         return out
 
     def report_stmt(self, s: m.Report, indent: int) -> list[str]:
         assert self.info is not None
         self.uses.add("types")
-        return assign("self.status.head.status", "=", Atom(f"{self.info.c.name}_STATUS_{s.status}"), indent)
+        return assign(f"{self.own()}.head.status", "=", Atom(f"{self.info.c.name}_STATUS_{s.status}"), indent)
 
     def if_stmt(self, s: m.If, indent: int) -> list[str]:
         out: list[str] = []
