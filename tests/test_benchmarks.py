@@ -24,3 +24,12 @@ def test_callgrind_benchmark_compares_equivalent_steps() -> None:
     for _, gen, hand, ratio in rows:
         assert float(gen) > 0 and float(hand) > 0
         assert abs(float(gen) / float(hand) - float(ratio)) < 0.01
+
+
+def test_rust_benchmark_cross_checks_rust_against_c() -> None:
+    """bench/bench_rust_step.py runs the same 10,000 AHEAD steps in Rust and C and compares every one."""
+    proc = subprocess.run([sys.executable, str(ROOT / "bench/bench_rust_step.py")], capture_output=True, text=True, cwd=ROOT, timeout=600)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert re.search(r"cross-check: .* after every step \(digest [0-9a-f]+\): yes", proc.stdout), proc.stdout
+    rust = re.search(r"^Rust release\s+([\d.]+)", proc.stdout, re.M)
+    assert rust and float(rust.group(1)) > 0, proc.stdout
