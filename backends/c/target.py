@@ -19,7 +19,7 @@ import re
 
 from rcsc import model as m
 from rcsc.backend import BuildOptions, CtrlInfo, Target, expr_key, impure_functions, lower_controller
-from rcsc.types import BOOL, DURATION, F64, I32, I64, U32, EnumType, FloatType, IntType, RecordType, Type
+from rcsc.types import BOOL, DURATION, I32, I64, U32, EnumType, FloatType, IntType, RecordType, Type
 
 C_KEYWORDS = frozenset(
     "auto break case char const continue default do double else enum extern float for goto if inline int long "
