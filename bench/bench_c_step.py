@@ -53,11 +53,13 @@ GOAL = 1.0
 VARIANTS = [("generated", "submarine_PR_step"), ("hand-written", "hand_pr_step")]
 
 
-def generate(out: Path) -> None:
-    cmd = [sys.executable, "-m", "rcsc", "build", str(DESIGN), "--target", "c", "-o", str(out)]
+def generate(out: Path, target: str = "c") -> None:
+    """The current generator's output for the submarine (exit 2 if it fails)."""
+    cmd = [sys.executable, "-m", "rcsc", "build", str(DESIGN), "--target", target, "-o", str(out)]
     r = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
     if r.returncode != 0:
-        sys.exit(f"rcsc build failed ({r.returncode}):\n{r.stdout}{r.stderr}")
+        print(f"rcsc build --target {target} failed ({r.returncode}):\n{r.stdout}{r.stderr}", file=sys.stderr)
+        sys.exit(2)
 
 
 def compile_driver(cc: str, gen: Path, exe: Path) -> None:
@@ -107,11 +109,15 @@ def read_ir(out: Path) -> int:
     return total[events.index("Ir")]
 
 
-def annotate(out: Path, steps: int, top: int) -> list[tuple[float, str]]:
-    """The `top` costliest source lines of a callgrind run: (Ir per step, source line)."""
-    r = subprocess.run(["callgrind_annotate", "--auto=yes", "--show-percs=no", str(out)], capture_output=True, text=True)
-    if r.returncode != 0:  # older callgrind_annotate has no --show-percs
-        r = subprocess.run(["callgrind_annotate", "--auto=yes", str(out)], capture_output=True, text=True)
+def annotate(out: Path, steps: int, top: int, dirs: tuple[Path, ...] = ()) -> list[tuple[float, str]]:
+    """The `top` costliest source lines of a callgrind run: (Ir per step, source line).
+
+    `dirs`: where callgrind_annotate looks for sources it cannot find by their recorded path."""
+    inc = [f"--include={d}" for d in dirs]
+    for opts in (["--show-percs=no"], []):  # older callgrind_annotate has no --show-percs
+        r = subprocess.run(["callgrind_annotate", "--auto=yes", *opts, *inc, str(out)], capture_output=True, text=True)
+        if r.returncode == 0:
+            break
     rows = []
     in_source = False
     for line in r.stdout.splitlines():

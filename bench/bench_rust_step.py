@@ -39,7 +39,6 @@ disagree, 2 if a tool is missing or a build fails).
 from __future__ import annotations
 
 import argparse
-import re
 import shutil
 import subprocess
 import sys
@@ -88,16 +87,9 @@ def fail(msg: str, code: int) -> None:
     sys.exit(code)
 
 
-def generate(target: str, out: Path) -> None:
-    cmd = [sys.executable, "-m", "rcsc", "build", str(DESIGN), "--target", target, "-o", str(out)]
-    r = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
-    if r.returncode != 0:
-        fail(f"rcsc build --target {target} failed ({r.returncode}):\n{r.stdout}{r.stderr}", 2)
-
-
 def compile_c(cc: str, gen: Path, exe: Path) -> None:
     srcs = [RSRC / "driver_c.c", gen / "submarine_PR.c", gen / "submarine.c"]
-    cmd = [cc, *cstep.CFLAGS, *cstep.DEBUG, "-Wall", "-Wextra", f"-I{gen}", *map(str, srcs), "-o", str(exe)]
+    cmd = [cc, *cstep.CFLAGS, *cstep.DEBUG, "-Wall", "-Wextra", f"-I{gen}", f"-I{cstep.CSRC}", *map(str, srcs), "-o", str(exe)]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         fail(" ".join(cmd) + "\n" + r.stderr, 2)
@@ -135,37 +127,11 @@ def first_difference(a: Path, b: Path, steps: int) -> str:
 def callgrind(exe: Path, steps: int, fns: tuple[str, ...], out: Path) -> tuple[str, int]:
     """Instructions executed inside the first of `fns` that collects any (and its callees)."""
     for fn in fns:
-        cmd = ["valgrind", "--tool=callgrind", "--collect-atstart=no", f"--toggle-collect={fn}",
-               f"--callgrind-out-file={out}", str(exe), str(steps)]
-        r = subprocess.run(cmd, capture_output=True, text=True)
-        if r.returncode != 0:
-            fail(r.stderr[-3000:], 2)
-        ir = cstep.read_ir(out)
+        ir = cstep.callgrind(exe, steps, fn, out)
         if ir > 0:
             return fn, ir
     fail(f"callgrind collected nothing in {exe} ({', '.join(fns)})", 2)
     raise AssertionError
-
-
-def annotate(out: Path, steps: int, top: int, dirs: list[Path]) -> list[tuple[float, str]]:
-    """The `top` costliest source lines of a callgrind run: (Ir per step, source line)."""
-    inc = [f"--include={d}" for d in dirs]
-    rows = []
-    for opts in (["--show-percs=no"], []):  # older callgrind_annotate has no --show-percs
-        r = subprocess.run(["callgrind_annotate", "--auto=yes", *opts, *inc, str(out)], capture_output=True, text=True)
-        if r.returncode == 0:
-            break
-    in_source = False
-    for line in r.stdout.splitlines():
-        if "Auto-annotated source" in line:
-            in_source = True
-            continue
-        m = re.match(r"^\s*([\d,]+)\s+(?:\([\s\d.]+%\)\s+)?(.*)$", line)
-        if not in_source or not m or m.group(2).startswith("<") or "events annotated" in m.group(2):
-            continue
-        rows.append((int(m.group(1).replace(",", "")) / steps, m.group(2).strip()))
-    rows.sort(key=lambda t: -t[0])
-    return rows[:top]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -198,8 +164,8 @@ def main(argv: list[str] | None = None) -> int:
         work = Path(tmp.name)
     try:
         gen_c, gen_rs = work / "gen_c", work / "gen_rust"
-        generate("c", gen_c)
-        generate("rust", gen_rs)
+        cstep.generate(gen_c, "c")
+        cstep.generate(gen_rs, "rust")
         exes: list[tuple[str, Path, tuple[str, ...]]] = []
         for cc in compilers:
             exe = work / f"driver_{cc}"
@@ -229,7 +195,7 @@ def main(argv: list[str] | None = None) -> int:
             toggled[name], ir = callgrind(exe, args.steps, fns, out)
             per_step[name] = ir / args.steps
             if args.annotate:
-                notes[name] = annotate(out, args.steps, args.top, [work, gen_c, gen_rs])
+                notes[name] = cstep.annotate(out, args.steps, args.top, (work, gen_c, gen_rs))
 
         rustc = subprocess.run(["rustc", "--version"], capture_output=True, text=True).stdout.strip()
         print(f"PR AHEAD plan (submarine.rcs), {args.steps} steps; C: {' '.join(cstep.CFLAGS)}; "

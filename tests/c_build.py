@@ -15,6 +15,7 @@ import io
 import os
 import re
 import subprocess
+import time
 import tomllib
 from pathlib import Path
 
@@ -151,6 +152,44 @@ def run_main(exe: Path, scn: Path, trace: Path, *extra: str, timeout: float = 30
         [str(exe), "--fast", "--no-console", "--no-timing", "--scenario", str(scn), "--trace", str(trace), *extra],
         capture_output=True, text=True, timeout=timeout, env=env, stdin=subprocess.DEVNULL,
     )
+
+
+class Console:
+    """A Main Program on a pseudo-terminal, for the keyboard tests (Appendix B's pause and single step)."""
+
+    def __init__(self, argv: list[str]) -> None:
+        import pty
+
+        self.pid, self.fd = pty.fork()
+        if self.pid == 0:  # the child: the Main Program on the pty
+            os.execv(argv[0], argv)
+        self.out = b""  # everything read so far
+
+    def read_for(self, seconds: float) -> bytes:
+        """What the program prints within `seconds` (also added to `out`)."""
+        import select
+
+        end = time.monotonic() + seconds
+        got = b""
+        while time.monotonic() < end:
+            ready, _, _ = select.select([self.fd], [], [], 0.05)
+            if ready:
+                try:
+                    got += os.read(self.fd, 4096)
+                except OSError:
+                    break
+        self.out += got
+        return got
+
+    def key(self, k: bytes) -> None:
+        os.write(self.fd, k)
+
+    def wait(self) -> int:
+        """The exit status (os.waitpid's); the pty stays open until close()."""
+        return os.waitpid(self.pid, 0)[1]
+
+    def close(self) -> None:
+        os.close(self.fd)
 
 
 def first_difference(a: bytes, b: bytes) -> str:

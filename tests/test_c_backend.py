@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from c_build import C_CONFIGS, CONFORMANCE, ROOT, Builds, case_id, first_difference, generate, reference_trace, run_main
+from c_build import C_CONFIGS, CONFORMANCE, ROOT, Builds, Console, case_id, first_difference, generate, reference_trace, run_main
 
 SUBMARINE = ROOT / "examples/submarine/submarine.rcs"
 CELL = ROOT / "examples/machining_cell/machining_cell.rcs"
@@ -184,42 +184,19 @@ def test_bad_scenario_is_reported_with_its_position(builds: Builds, tmp_path: Pa
 
 def test_console_pause_single_step_and_quit(builds: Builds) -> None:
     """Appendix B's keyboard: `p` pauses, `s` runs one cycle, `q` quits (on a terminal)."""
-    import pty
-    import select
-
     exe = builds.c_binary(SUBMARINE, "gcc-O2")
-    pid, fd = pty.fork()
-    if pid == 0:  # the child: the Main Program on the pty
-        os.execv(str(exe), [str(exe), "--trace", "/dev/null"])
-    out = b""
-
-    def read_for(seconds: float) -> bytes:
-        nonlocal out
-        end = time.monotonic() + seconds
-        got = b""
-        while time.monotonic() < end:
-            r, _, _ = select.select([fd], [], [], 0.05)
-            if r:
-                try:
-                    chunk = os.read(fd, 4096)
-                except OSError:
-                    break
-                got += chunk
-        out += got
-        return got
-
-    read_for(0.3)
-    os.write(fd, b"p")
-    paused = read_for(0.5)
-    assert b"pause" in paused.lower(), out
-    os.write(fd, b"s")
-    read_for(0.3)
-    os.write(fd, b"q")
-    read_for(1.0)
-    _, status = os.waitpid(pid, 0)
-    os.close(fd)
-    assert os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0, out
-    assert b"TURBINE_SIM" in out, "the timing table is printed on quit"
+    con = Console([str(exe), "--trace", "/dev/null"])
+    con.read_for(0.3)
+    con.key(b"p")
+    assert b"pause" in con.read_for(0.5).lower(), con.out
+    con.key(b"s")
+    con.read_for(0.3)
+    con.key(b"q")
+    con.read_for(1.0)
+    status = con.wait()
+    con.close()
+    assert os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0, con.out
+    assert b"TURBINE_SIM" in con.out, "the timing table is printed on quit"
 
 
 def test_several_cpus_are_refused(tmp_path: Path, capsys) -> None:

@@ -33,7 +33,10 @@ from pathlib import Path
 
 import pytest
 
+from c_build import Console
+
 from rcsc import numeric
+from rcsc.trace import fmt_float
 from rcsc.types import I32, I64, U32
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -381,61 +384,35 @@ def test_realtime_runs_or_says_what_is_missing(crate: Crate) -> None:
 @pytest.mark.skipif(sys.platform != "linux", reason="signals and ptys as on Linux")
 def test_console_pause_single_step_and_quit(crate: Crate) -> None:
     """On a terminal: `p` pauses, `s` runs one cycle, `p` resumes, `q` quits; the terminal is restored."""
-    import pty
-    import select
     import termios
 
-    pid, fd = pty.fork()
-    if pid == 0:  # the child: the Main Program on the pty
-        os.execv(str(crate.release), [str(crate.release), "--trace", "/dev/null"])
-    out = b""
-
-    def read_for(seconds: float) -> bytes:
-        nonlocal out
-        end = time.monotonic() + seconds
-        got = b""
-        while time.monotonic() < end:
-            r, _, _ = select.select([fd], [], [], 0.05)
-            if r:
-                try:
-                    got += os.read(fd, 4096)
-                except OSError:
-                    break
-        out += got
-        return got
-
+    con = Console([str(crate.release), "--trace", "/dev/null"])
+    fd = con.fd
     try:
-        assert b"rcs: console: p or space pause/resume" in read_for(0.3), out
+        assert b"rcs: console: p or space pause/resume" in con.read_for(0.3), con.out
         assert not termios.tcgetattr(fd)[3] & (termios.ICANON | termios.ECHO), "keys one by one, no echo"
-        os.write(fd, b"p")
-        paused = read_for(0.4)
+        con.key(b"p")
+        paused = con.read_for(0.4)
         m = re.search(rb"rcs: paused after cycle (\d+) ", paused)
-        assert m, out
-        os.write(fd, b"s")
-        read_for(0.3)
-        os.write(fd, b"p")
-        resumed = read_for(0.3)
-        assert f"rcs: resumed after cycle {int(m.group(1)) + 1}\r\n".encode() in resumed, out
-        os.write(fd, b"q")
-        read_for(1.0)
-        _, status = os.waitpid(pid, 0)
+        assert m, con.out
+        con.key(b"s")
+        con.read_for(0.3)
+        con.key(b"p")
+        resumed = con.read_for(0.3)
+        assert f"rcs: resumed after cycle {int(m.group(1)) + 1}\r\n".encode() in resumed, con.out
+        con.key(b"q")
+        con.read_for(1.0)
+        status = con.wait()
     finally:
         attrs = termios.tcgetattr(fd)
-        os.close(fd)
+        con.close()
+    out = con.out
     assert os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0, out
     assert attrs[3] & termios.ICANON and attrs[3] & termios.ECHO, "the terminal is restored"
     assert b"rcs: timing of fixture on MAIN" in out, "the timing table is printed on quit"
 
 
 # ---- f64 as %.17g ---------------------------------------------------------------------
-
-
-def _g17(x: float) -> str:
-    if math.isnan(x):
-        return '"nan"'
-    if math.isinf(x):
-        return '"inf"' if x > 0 else '"-inf"'
-    return format(x, ".17g")
 
 
 def test_f64_formatting_equals_python_format_17g(crate: Crate) -> None:
@@ -455,7 +432,7 @@ def test_f64_formatting_equals_python_format_17g(crate: Crate) -> None:
     assert proc.returncode == 0, proc.stderr
     got = proc.stdout.splitlines()
     assert len(got) == len(values) >= 2000
-    bad = [(v, g, _g17(v)) for v, g in zip(values, got) if g != _g17(v)]
+    bad = [(v, g, fmt_float(v)) for v, g in zip(values, got) if g != fmt_float(v)]
     assert not bad, bad[:10]
 
 

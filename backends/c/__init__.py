@@ -12,6 +12,8 @@ from rcsc import model as m
 from rcsc.backend import (
     OutFile,
     RuleStep,
+    initial_value,
+    ordered_types,
     StateTest,
     expr_key,
     plan_layout,
@@ -23,28 +25,10 @@ from rcsc.backend import (
 )
 from rcsc.backends.c.tables import main_tables
 from rcsc.backends.c.target import CTarget, _strip_parens, c_comment
-from rcsc.types import EnumType, RecordType, Type
+from rcsc.simulate import zero_value
+from rcsc.types import EnumType, RecordType
 
 RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c")
-
-
-def ordered_types(design: m.Design) -> list[Type]:
-    """Enums, then records with every record after the records it contains."""
-    out: list[Type] = list(design.enums.values())
-    done: set[str] = set()
-
-    def visit(t: RecordType) -> None:
-        if t.name in done:
-            return
-        done.add(t.name)
-        for _, ft in t.fields:
-            if isinstance(ft, RecordType):
-                visit(ft)
-        out.append(t)
-
-    for t in design.records.values():
-        visit(t)  # type: ignore[arg-type]
-    return out
 
 
 @register
@@ -133,11 +117,11 @@ class CBackend(CTarget):
 
     def extern_stub(self, f: m.Function) -> dict:
         return {"proto": self.prototype(f), "where": where(f.span), "params": [self.ident(q.name) for q in f.params],
-                "zero": self.literal(self.zero(f.ret), f.ret)}
+                "zero": self.literal(zero_value(f.ret), f.ret)}
 
     def design_source(self, ctrls: list[m.Controller]) -> dict:
         d = self.design
-        gm = [f"b->gm.{self.ident(n)} = {self.literal(v.init if v.init is not None else self.zero(v.type), v.type)};" for n, v in d.gm.items()]
+        gm = [f"b->gm.{self.ident(n)} = {self.init_value(v)};" for n, v in d.gm.items()]
         inits = []
         for c in ctrls:
             member = self.ident(c.name)
@@ -148,7 +132,7 @@ class CBackend(CTarget):
         return {"p": self.p, "gm": gm, "ctrls": inits}
 
     def init_value(self, v: m.Var) -> str:
-        return self.literal(v.init if v.init is not None else self.zero(v.type), v.type)
+        return self.literal(initial_value(v), v.type)
 
     # ---- one controller -----------------------------------------------------------------
 

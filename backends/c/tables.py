@@ -9,6 +9,7 @@ templates/main.c.j2.
 from __future__ import annotations
 
 from rcsc import model as m
+from rcsc.backend import ordered_types
 from rcsc.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type
 
 from rcsc.backends.c.target import CTarget, c_string
@@ -30,8 +31,6 @@ def _fields(tg: CTarget, struct: str, items: list[tuple[str, Type]]) -> list[str
 
 
 def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: list[m.Controller]) -> dict:
-    from rcsc.backends.c import ordered_types
-
     d, p = tg.design, tg.p
     types = []
     for t in ordered_types(d):

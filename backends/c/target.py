@@ -116,17 +116,6 @@ class CTarget(Target):
             return "{" + inner + "}" if braces else f"(({self.ctype(t)}){{{inner}}})"
         raise ValueError(f"no C literal for {t}")
 
-    def zero(self, t: Type):
-        if t == BOOL:
-            return False
-        if isinstance(t, FloatType):
-            return 0.0
-        if isinstance(t, EnumType):
-            return t.members[0]
-        if isinstance(t, RecordType):
-            return {n: self.zero(ft) for n, ft in t.fields}
-        return 0
-
     # ---- expressions ---------------------------------------------------------------
 
     def const_expr(self, e: m.Const) -> str:

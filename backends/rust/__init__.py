@@ -23,9 +23,10 @@ from __future__ import annotations
 from importlib import resources
 
 from rcsc import model as m
-from rcsc.backend import OutFile, RuleStep, StateTest, built_controllers, expr_key, plan_layout, register, schedule_of, tests_state, where
+from rcsc.backend import OutFile, RuleStep, ordered_types, StateTest, built_controllers, expr_key, plan_layout, register, schedule_of, tests_state, where
 from rcsc.backends.rust.fmt import Atom, Bin, Call, Node, Struct, arm, assign, expr_stmt, field_decl, fn_head, if_open, let, pad, tail
 from rcsc.backends.rust.target import RustTarget, rust_comment
+from rcsc.simulate import zero_value
 from rcsc.types import I32, EnumType, RecordType, Type
 
 LIB_ALLOWS = [
@@ -50,25 +51,6 @@ EXPR_ALLOWS = [
     "clippy::needless_bool",
     "clippy::manual_clamp",
 ]
-
-
-def ordered_types(design: m.Design) -> list[Type]:
-    """Enums, then records with every record after the records it contains."""
-    out: list[Type] = list(design.enums.values())
-    done: set[str] = set()
-
-    def visit(t: RecordType) -> None:
-        if t.name in done:
-            return
-        done.add(t.name)
-        for _, ft in t.fields:
-            if isinstance(ft, RecordType):
-                visit(ft)
-        out.append(t)
-
-    for t in design.records.values():
-        visit(t)  # type: ignore[arg-type]
-    return out
 
 
 @register
@@ -153,7 +135,7 @@ class RustBackend(RustTarget):
             fns.append({
                 "where": f"{where(f.span)}, budget {_duration(f.budget_ns)}",
                 "head": fn_head(1, "", self.ident(f.name), params, self.rtype(f.ret)),
-                "zero": tail(self.literal(self.zero(f.ret), f.ret), 2),
+                "zero": tail(self.literal(zero_value(f.ret), f.ret), 2),
             })
         return {"design": self.design.name, "fns": fns, "uses_types": uses_types}
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import re
 
 from rcsc import model as m
+from rcsc.backend import ordered_types
 from rcsc.backends.rust.fmt import Array, Atom, Call, Cast, Node, Struct, Unary, arm, assign, fn_head, pad, tail
 from rcsc.backends.rust.target import RustTarget, rust_string
 from rcsc.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type
@@ -101,8 +102,6 @@ class _Main:
 
 
 def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: list[m.Controller]) -> dict:
-    from rcsc.backends.rust import ordered_types
-
     d = tg.design
     mp = _Main(tg)
     deploy = tg.options.exclude_simulators

@@ -24,7 +24,7 @@ import math
 import re
 
 from rcsc import model as m
-from rcsc.backend import BuildOptions, CtrlInfo, Target, expr_key, impure_functions, lower_controller
+from rcsc.backend import BuildOptions, CtrlInfo, Target, expr_key, impure_functions, initial_value, lower_controller
 from rcsc.backends.rust.fmt import (
     P_POSTFIX,
     P_UNARY,
@@ -194,19 +194,8 @@ class RustTarget(Target):
             return Struct(self.tname(t.name), [(self.ident(n), self.literal(value[n], ft)) for n, ft in t.fields])
         raise ValueError(f"no Rust literal for {t}")
 
-    def zero(self, t: Type):
-        if t == BOOL:
-            return False
-        if isinstance(t, FloatType):
-            return 0.0
-        if isinstance(t, EnumType):
-            return t.members[0]
-        if isinstance(t, RecordType):
-            return {n: self.zero(ft) for n, ft in t.fields}
-        return 0
-
     def init_value(self, v: m.Var) -> Node:
-        return self.literal(v.init if v.init is not None else self.zero(v.type), v.type)
+        return self.literal(initial_value(v), v.type)
 
     # ---- expressions ---------------------------------------------------------------
 
