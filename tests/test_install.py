@@ -12,6 +12,7 @@ import os
 import shutil
 import subprocess
 import sys
+import sysconfig
 import zipfile
 from pathlib import Path
 
@@ -32,8 +33,17 @@ def test_installed_wheel_checks_a_design_from_another_folder(tmp_path: Path) -> 
     assert "rcsc/stdlib/std/lifecycle.rcs" in names
 
     venv = tmp_path / "venv"
-    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)], check=True)
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
     py = venv / "bin" / "python"
+    # The dependencies come from the environment running the tests, which may
+    # itself be a virtual environment (then `--system-site-packages` would
+    # reach the base interpreter, not it).  A .pth line adds its library
+    # folders as plain paths: their own .pth files (the checkout's editable
+    # install among them) are not processed, so `rcsc` comes from the wheel.
+    purelib = subprocess.run([str(py), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+                             check=True, capture_output=True, text=True).stdout.strip()
+    outer = {sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]}
+    Path(purelib, "rcsc_test_outer.pth").write_text("".join(f"{d}\n" for d in sorted(outer)))
     subprocess.run([str(py), "-m", "pip", "install", "-q", "--no-deps", "--force-reinstall", str(wheel)], check=True)
 
     work = tmp_path / "elsewhere"
