@@ -27,6 +27,7 @@ from importlib import resources
 import jinja2
 
 from rcsc import model as m
+from rcsc import safeio
 from rcsc.diagnostics import Diagnostics
 from rcsc.simulate import zero_value
 from rcsc.source import Span
@@ -354,6 +355,10 @@ class Target:
     name = ""
     summary = ""
     package = ""  # the Python package whose templates/ and runtime/ folders the target uses
+    # The files a build tool starts from (relative paths): written last and
+    # taken away first, so an interrupted `rcsc build` never leaves a folder
+    # that builds half old and half new (see rcsc.safeio).
+    entry_files: tuple[str, ...] = ()
 
     def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
         self.design = design
@@ -422,50 +427,21 @@ class Target:
 # ---- writing ----------------------------------------------------------------------------
 
 
-@dataclass
-class WriteResult:
-    written: list[str] = field(default_factory=list)
-    unchanged: list[str] = field(default_factory=list)
-    kept: list[str] = field(default_factory=list)  # user files that already existed
-    refused: list[str] = field(default_factory=list)  # files in the way that rcsc did not write
-
-
 def _is_generated(path: str) -> bool:
     with open(path, "rb") as f:
         head = f.read(BANNER_WINDOW)
     return BANNER.encode() in head.lower()
 
 
-def write_files(files: list[OutFile], out_dir: str) -> WriteResult:
-    """Write `files` under `out_dir`.
+def write_files(files: list[OutFile], out_dir: str, entry_files: tuple[str, ...] = ()) -> safeio.TreeResult:
+    """Write `files` under `out_dir` as one transaction (`rcsc.safeio.write_tree`).
 
     A generated file replaces an earlier generated file (it carries the
     banner); a file without the banner was written by a person and is never
     replaced: it is reported in `refused` and nothing is written at all.
-    User files are written only when missing.
+    User files are written only when missing.  `entry_files` are the build
+    tool's entry files (the target's `entry_files`): written last, so an
+    interrupted write leaves no build file rather than a mixed build.
     """
-    res = WriteResult()
-    for f in files:
-        path = os.path.join(out_dir, *f.path.split("/"))
-        if os.path.exists(path) and not f.user and not (os.path.isfile(path) and _is_generated(path)):
-            res.refused.append(f.path)
-    if res.refused:
-        return res
-    for f in files:
-        path = os.path.join(out_dir, *f.path.split("/"))
-        os.makedirs(os.path.dirname(path), exist_ok=True)
-        data = f.text.encode("utf-8")
-        if os.path.exists(path):
-            if f.user:
-                res.kept.append(f.path)
-                continue
-            with open(path, "rb") as old:
-                if old.read() == data:
-                    res.unchanged.append(f.path)
-                    continue
-        tmp = path + ".rcsc-tmp"
-        with open(tmp, "wb") as out:
-            out.write(data)
-        os.replace(tmp, path)
-        res.written.append(f.path)
-    return res
+    tree = [safeio.TreeFile(f.path, f.text.encode("utf-8"), f.user, f.path in entry_files) for f in files]
+    return safeio.write_tree(tree, out_dir, _is_generated)

@@ -13,6 +13,7 @@ import os
 from dataclasses import dataclass
 from importlib import resources
 
+from rcsc import safeio
 from rcsc import ast
 from rcsc.diagnostics import Diagnostics
 from rcsc.parse import text_to_ast
@@ -32,8 +33,10 @@ class LoadedFile:
 
 
 def _read(path: str) -> str:
-    with open(path, "rb") as fh:
-        data = fh.read()
+    try:
+        data = safeio.read_input(path)
+    except safeio.InputError as exc:
+        raise InputError(str(exc)) from exc
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -14,6 +14,7 @@ import time
 from dataclasses import dataclass, field
 from xml.sax.saxutils import escape, quoteattr
 
+from rcsc import safeio
 from rcsc.diagnostics import Diagnostics
 from rcsc.driver import check_path
 from rcsc.loader import InputError
@@ -27,9 +28,10 @@ _DESIGN_HEADER = re.compile(r"\A(?:\s|//[^\n]*\n|/\*.*?\*/)*design\s", re.S)
 def is_design_file(path: str) -> bool:
     if not path.endswith(".rcs"):
         return False
+    # Only regular files: a FIFO or device in a design folder must not block
+    # or flood the discovery (read_input opens without blocking).
     try:
-        with open(path, encoding="utf-8") as fh:
-            head = fh.read(65536)
+        head = safeio.read_input(path)[:65536].decode("utf-8")
     except (OSError, UnicodeDecodeError):
         return False
     return bool(_DESIGN_HEADER.match(head))
@@ -135,8 +137,7 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict) -> Outcome
         return Outcome(design_path, scenario_path, False, 0.0, message="the simulator runs single-CPU designs")
     diags = Diagnostics()
     try:
-        with open(scenario_path, encoding="utf-8") as fh:
-            text = fh.read()
+        text = safeio.read_input(scenario_path).decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         return Outcome(design_path, scenario_path, False, 0.0, message=f"cannot read the scenario: {exc}")
     sc = text_to_scenario(SourceFile(scenario_path, text), checked.model, diags)

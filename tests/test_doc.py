@@ -277,7 +277,7 @@ def test_doc_never_overwrites_a_page_a_person_wrote(tmp_path: Path, capsys) -> N
     mine.write_text("<html><body>my notes</body></html>\n")
     design = str(Path(__file__).parent.parent / "examples" / "submarine" / "submarine.rcs")
     assert main(["doc", design, "-o", str(site)]) == 2
-    assert "refusing to overwrite" in capsys.readouterr().err
+    assert "refusing to replace" in capsys.readouterr().err
     assert mine.read_text() == "<html><body>my notes</body></html>\n"
     mine.unlink()
     assert main(["doc", design, "-o", str(site)]) == 0  # rcsc's own page is replaced freely

@@ -33,6 +33,8 @@ RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c")
 
 @register
 class CBackend(CTarget):
+    entry_files = ("Makefile", "CMakeLists.txt")
+
     def files(self) -> list[OutFile]:
         d, p = self.design, self.p
         ctrls = built_controllers(d, self.options)

@@ -55,6 +55,8 @@ EXPR_ALLOWS = [
 
 @register
 class RustBackend(RustTarget):
+    entry_files = ("Cargo.toml",)
+
     def files(self) -> list[OutFile]:
         from rcsc.backends.rust.tables import main_program
 

@@ -1,0 +1,330 @@
+"""Reading inputs and writing outputs safely: the file-system rules of every command.
+
+rcsc runs in CI on files it did not write, in folders others can write to,
+and is stopped with Ctrl-C.  Whatever happens, it must not follow a link it
+did not make, delete or replace a file a person wrote, hang on a special
+file, or leave an output folder half old and half new.  All file access of
+the commands goes through this module:
+
+* `read_input` reads a design or scenario: regular files only (a FIFO,
+  a device or /dev/zero is refused at once) and at most `MAX_INPUT` bytes.
+* `write_file` replaces one output file atomically: the data go to a fresh
+  temporary file beside it (exclusive creation, a random name), which is
+  then renamed over the target, so the target is never half written and a
+  symbolic link at the target is replaced, never written through.
+* `write_tree` writes a whole output folder (a build) as one transaction:
+  every new file is first written into a private folder `.rcsc-txn` inside
+  the output folder, a commit marker is written, and only then are the files
+  renamed into place, with SIGINT and SIGTERM held back for that short
+  phase.  The build's entry files (Makefile, CMakeLists.txt, Cargo.toml) are
+  taken away first and put in place last, so if the process dies anyway
+  (SIGKILL, power loss) in between, there is no build file and make, cmake
+  or cargo refuse to build the mix; `.rcsc-txn` stays behind and the next
+  `rcsc build` finishes the transaction (rolls it forward if it was
+  committed, else discards it).  An I/O error while renaming rolls back to
+  the old files.  So a build tool only ever sees the complete old or the
+  complete new output.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import stat
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+# Designs of 200 controllers are ~5 MB; 64 MiB leaves room and stops
+# `rcsc check /dev/stdin < /dev/zero`-style inputs long before memory runs out.
+MAX_INPUT = 64 * 1024 * 1024
+
+TXN = ".rcsc-txn"
+_OWNER = "OWNER"
+_OWNER_TEXT = "rcsc build transaction: rcsc removes this folder when the build is complete\n"
+
+
+class InputError(OSError):
+    """An input that rcsc refuses to read (not a regular file, too large)."""
+
+
+def read_input(path: str, limit: int = MAX_INPUT) -> bytes:
+    """The bytes of a regular file of at most `limit` bytes; InputError otherwise.
+
+    The file is opened without blocking (a FIFO would otherwise wait for a
+    writer forever) and checked with fstat on the open descriptor, so what is
+    checked is what is read.
+    """
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise InputError(f"`{path}` is not a regular file")
+        if st.st_size > limit:
+            raise InputError(f"`{path}` is {st.st_size} bytes; the limit is {limit} bytes")
+        chunks, size = [], 0
+        while True:
+            chunk = os.read(fd, 1 << 20)
+            if not chunk:
+                break
+            size += len(chunk)
+            if size > limit:  # the file grew while being read
+                raise InputError(f"`{path}` is over {limit} bytes")
+            chunks.append(chunk)
+        return b"".join(chunks)
+    finally:
+        os.close(fd)
+
+
+def is_regular_file(path: str) -> bool:
+    """True for a regular file (links followed): what may be read as an input."""
+    try:
+        return stat.S_ISREG(os.stat(path).st_mode)
+    except OSError:
+        return False
+
+
+def write_file(path: str, data: bytes, may_replace: Callable[[str], bool] | None = None) -> None:
+    """Write `data` to `path` atomically (temporary file beside it, then rename).
+
+    `may_replace(path)` is asked when `path` exists as a regular file; an
+    existing symbolic link or special file is refused unless `may_replace` is
+    None (then the link itself is replaced, its target is never touched).
+    """
+    directory = os.path.dirname(path) or "."
+    if may_replace is not None and os.path.lexists(path):
+        st = os.lstat(path)
+        if not stat.S_ISREG(st.st_mode):
+            raise FileExistsError(f"refusing to replace `{path}`: it is not a regular file")
+        if not may_replace(path):
+            raise FileExistsError(f"refusing to replace `{path}`: it was not written by rcsc")
+    fd, tmp = tempfile.mkstemp(prefix=".rcsc-", suffix=".tmp", dir=directory)
+    try:
+        with os.fdopen(fd, "wb") as out:
+            out.write(data)
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        _unlink_quietly(tmp)
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _unlink_quietly(path: str) -> None:
+    try:
+        os.unlink(path)
+    except FileNotFoundError:
+        return
+
+
+# ---- a whole output folder ------------------------------------------------------------
+
+
+@dataclass
+class TreeFile:
+    """One file of an output folder; `user` files are written only when missing."""
+
+    path: str  # relative, with "/"
+    data: bytes
+    user: bool = False
+    entry: bool = False  # a build entry file: removed first, written last
+
+
+@dataclass
+class TreeResult:
+    written: list[str] = field(default_factory=list)
+    unchanged: list[str] = field(default_factory=list)
+    kept: list[str] = field(default_factory=list)  # user files that already existed
+    refused: list[str] = field(default_factory=list)  # "path: why" for files in the way
+    recovered: str = ""  # what was done with an interrupted earlier transaction
+
+
+def _check_relpath(rel: str) -> list[str]:
+    parts = rel.split("/")
+    if not rel or rel.startswith("/") or any(p in ("", ".", "..") for p in parts) or parts[0] == TXN:
+        raise ValueError(f"bad output path {rel!r}")
+    return parts
+
+
+def write_tree(files: list[TreeFile], out_dir: str, is_ours: Callable[[str], bool]) -> TreeResult:
+    """Write `files` under `out_dir` as one transaction (see the module docstring).
+
+    A file already there is replaced only if `is_ours(path)` says rcsc wrote
+    it; a file in the way that is not ours, a symbolic link, or a folder where
+    a file goes (or a link where a folder goes) is reported in `refused`, and
+    then nothing at all is written.  OSError on I/O failure, after rolling
+    back.
+    """
+    res = TreeResult()
+    os.makedirs(out_dir, exist_ok=True)
+    res.recovered = recover(out_dir)
+
+    plan: list[tuple[TreeFile, str]] = []
+    for f in files:
+        parts = _check_relpath(f.path)
+        where = out_dir
+        for d in parts[:-1]:
+            where = os.path.join(where, d)
+            if os.path.lexists(where) and (os.path.islink(where) or not os.path.isdir(where)):
+                res.refused.append(f"{f.path}: `{d}` is not a plain folder")
+                break
+        else:
+            path = os.path.join(out_dir, *parts)
+            if not os.path.lexists(path):
+                plan.append((f, path))
+                continue
+            st = os.lstat(path)
+            if not stat.S_ISREG(st.st_mode):
+                res.refused.append(f"{f.path}: it is a {'symbolic link' if stat.S_ISLNK(st.st_mode) else 'special file or folder'}")
+            elif f.user:
+                res.kept.append(f.path)
+            elif not is_ours(path):
+                res.refused.append(f"{f.path}: it was not generated by rcsc")
+            else:
+                with open(path, "rb") as old:
+                    if old.read() == f.data:
+                        res.unchanged.append(f.path)
+                        continue
+                plan.append((f, path))
+    if res.refused or not plan:
+        return res
+    # An unchanged entry file is rewritten too: it must be away while the
+    # other files change, or a build tool would build the mix.
+    for f in files:
+        if f.entry and f.path in res.unchanged:
+            res.unchanged.remove(f.path)
+            plan.append((f, os.path.join(out_dir, *f.path.split("/"))))
+
+    # Entry files last; _apply takes the old ones away before anything else.
+    plan.sort(key=lambda fp: fp[0].entry)
+    txn = os.path.join(out_dir, TXN)
+    os.mkdir(txn, 0o700)  # exclusive: recover() removed any earlier one
+    try:
+        _write_exclusive(os.path.join(txn, _OWNER), _OWNER_TEXT.encode())
+        os.mkdir(os.path.join(txn, "new"))
+        os.mkdir(os.path.join(txn, "old"))
+        for i, (f, _) in enumerate(plan):
+            _write_exclusive(os.path.join(txn, "new", str(i)), f.data)
+        entries = [[i, f.path, f.entry] for i, (f, _) in enumerate(plan)]
+        _write_exclusive(os.path.join(txn, "plan.json"), json.dumps(entries).encode())
+    except BaseException:
+        shutil.rmtree(txn, ignore_errors=True)
+        raise
+
+    # The commit point: from here on the transaction is completed even if this
+    # process is killed (the next run rolls it forward).
+    held = _hold_signals()
+    try:
+        try:
+            _write_exclusive(os.path.join(txn, "commit"), b"")
+            _apply(out_dir, txn, entries)
+        except BaseException:
+            # An I/O error (or anything else this process lives through):
+            # back to the old files.  Only a run that died rolls forward.
+            _roll_back(out_dir, txn, entries)
+            shutil.rmtree(txn, ignore_errors=True)
+            raise
+        shutil.rmtree(txn)
+    finally:
+        _release_signals(held)
+    res.written = [f.path for f, _ in plan]
+    res.written.sort(key=[f.path for f in files].index)
+    return res
+
+
+def _write_exclusive(path: str, data: bytes) -> None:
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    fd = os.open(path, flags, 0o666)
+    with os.fdopen(fd, "wb") as out:
+        out.write(data)
+
+
+def _apply(out_dir: str, txn: str, entries: list) -> None:
+    """Move each new file into place, keeping the file it replaces in old/.
+
+    The old entry files go first (then no build tool accepts the folder) and
+    the new entry files come last.
+    """
+    for i, rel, entry in sorted(entries, key=lambda e: not e[2]):
+        if entry:
+            _stash(out_dir, txn, i, rel)
+    for i, rel, _ in entries:
+        dest = os.path.join(out_dir, *rel.split("/"))
+        new = os.path.join(txn, "new", str(i))
+        if not os.path.lexists(new):
+            continue  # already moved (a roll forward after an interruption)
+        os.makedirs(os.path.dirname(dest), exist_ok=True)
+        _stash(out_dir, txn, i, rel)
+        os.rename(new, dest)
+
+
+def _stash(out_dir: str, txn: str, i: int, rel: str) -> None:
+    dest = os.path.join(out_dir, *rel.split("/"))
+    old = os.path.join(txn, "old", str(i))
+    new = os.path.join(txn, "new", str(i))
+    if os.path.lexists(new) and os.path.lexists(dest) and not os.path.lexists(old):
+        os.rename(dest, old)
+
+
+def _roll_back(out_dir: str, txn: str, entries: list) -> None:
+    """Undo `_apply` as far as it got: restore every replaced file, remove new ones."""
+    for i, rel, _ in reversed(entries):
+        dest = os.path.join(out_dir, *rel.split("/"))
+        new = os.path.join(txn, "new", str(i))
+        old = os.path.join(txn, "old", str(i))
+        try:
+            if not os.path.lexists(new) and os.path.lexists(dest):
+                os.rename(dest, new)  # it was ours to move in; take it back out
+            if os.path.lexists(old):
+                os.rename(old, dest)
+        except OSError:
+            continue  # restore what can be restored; the error that caused this is reported
+
+
+def recover(out_dir: str) -> str:
+    """Finish a transaction an earlier run left behind; a sentence saying what was done.
+
+    A `.rcsc-txn` folder without rcsc's OWNER file is not ours: it is left
+    alone and reported as an error.
+    """
+    txn = os.path.join(out_dir, TXN)
+    if not os.path.lexists(txn):
+        return ""
+    owner = os.path.join(txn, _OWNER)
+    if not os.path.islink(txn) and os.path.isdir(txn) and not os.listdir(txn):
+        os.rmdir(txn)  # killed right after creating it: nothing in it, nothing to lose
+        return "discarded an interrupted build that had not replaced any file"
+    if os.path.islink(txn) or not os.path.isdir(txn) or not os.path.isfile(owner):
+        raise FileExistsError(f"`{txn}` is in the way and was not made by rcsc; move it away")
+    with open(owner, "rb") as fh:
+        if fh.read() != _OWNER_TEXT.encode():
+            raise FileExistsError(f"`{txn}` is in the way and was not made by rcsc; move it away")
+    committed = os.path.exists(os.path.join(txn, "commit"))
+    if committed:
+        with open(os.path.join(txn, "plan.json"), "rb") as fh:
+            entries = json.loads(fh.read())
+        held = _hold_signals()
+        try:
+            _apply(out_dir, txn, entries)
+        finally:
+            _release_signals(held)
+    shutil.rmtree(txn)
+    return "finished an interrupted build" if committed else "discarded an interrupted build that had not replaced any file"
+
+
+def _hold_signals():
+    if not hasattr(signal, "pthread_sigmask"):
+        return None
+    return signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM, signal.SIGHUP})
+
+
+def _release_signals(held) -> None:
+    if held is not None:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
