@@ -165,6 +165,11 @@ and every CPU declares `heartbeat DURATION` and `schedule ...` once.
 Durations are exact whole numbers of nanoseconds. `1.5 us` is fine; `0.0001 ns`
 cannot be represented.
 """),
+    ("E0212", _E, "float literal out of range", """
+A decimal float literal is larger in magnitude than the largest f64 (about
+1.8e308). It would silently become infinity, so it is refused; write the
+largest value you mean, or compute infinity explicitly (e.g. `1.0 / 0.0`).
+"""),
     ("E0211", _E, "not callable here", """
 The name called is not a function, extern, record type or conversion, or an
 `extern` function is called inside a pure `fn` (pure functions must be the same

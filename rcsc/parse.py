@@ -9,6 +9,7 @@ the way an engineer reads them.
 
 from __future__ import annotations
 
+import math
 from fractions import Fraction
 from functools import lru_cache
 from importlib import resources
@@ -76,6 +77,57 @@ MAX_NESTING = 128
 def _depth(x) -> int:
     return getattr(x, "depth", 1) if x is not None else 0
 
+
+
+# ---- literals in bounded time ------------------------------------------------------------
+#
+# Python's int() refuses more than 4,300 digits and Fraction("1e100000000")
+# computes a 100-million-digit power of ten.  No fixed-width type holds more
+# than 20 decimal digits and no duration more than ~9.2e18 ns, so literals
+# beyond these bounds are replaced by a value that is just as out of range
+# (the type checker reports E0207 for it) without ever computing them.
+
+TOO_LARGE = 1 << 200  # beyond every type: reported as out of range
+_MAX_DIGITS = 80  # more significant digits than any literal that fits can have
+_MAX_EXPONENT = 400  # |exponent| beyond which a nonzero value is out of range or below 1 ns
+
+
+def literal_int(text: str) -> int:
+    """The value of an INT token (decimal or 0x hex, `_` separators), in bounded time."""
+    text = text.replace("_", "")
+    hexa = text.lower().startswith("0x")
+    digits = (text[2:] if hexa else text).lstrip("0")
+    if len(digits) > _MAX_DIGITS:
+        return TOO_LARGE
+    return int(digits or "0", 16 if hexa else 10)
+
+
+def literal_fraction(text: str) -> Fraction:
+    """The exact value of an INT or FLOAT token, in bounded time and size.
+
+    A nonzero value with a huge exponent is replaced by TOO_LARGE (positive
+    exponents) or by 1/TOO_LARGE (negative ones: finer than any unit), which
+    the callers report as out of range or as not a whole nanosecond.
+    """
+    text = text.replace("_", "")
+    if text.lower().startswith("0x"):
+        return Fraction(literal_int(text))
+    mantissa, _, exponent = text.lower().partition("e")
+    whole, _, frac = mantissa.partition(".")
+    if not (whole + frac).strip("0"):
+        return Fraction(0)
+    exp = int(exponent) if exponent and len(exponent.lstrip("+-0")) <= 6 else (0 if not exponent else (1 if "-" not in exponent else -1) * 10**7)
+    digits = (whole + frac).lstrip("0")
+    scale = exp - len(frac)
+    significant = digits.rstrip("0")
+    scale += len(digits) - len(significant)  # value = significant * 10**scale
+    if len(significant) + scale > _MAX_EXPONENT:
+        return Fraction(TOO_LARGE)
+    if scale < -4 * _MAX_EXPONENT or len(significant) > 4 * _MAX_EXPONENT:
+        # Then scale < -9 (the line above), and a last digit that is not 0
+        # that far below the point is finer than a nanosecond in any unit.
+        return Fraction(1, TOO_LARGE)
+    return Fraction(int(significant)) * Fraction(10) ** scale
 
 class _ToAst(Transformer_NonRecursive):
     """Lark tree -> rcsc.ast.  Every method receives the node's meta."""
@@ -411,8 +463,7 @@ class _ToAst(Transformer_NonRecursive):
     # -- expressions -------------------------------------------------------------
 
     def _int(self, tok: Token) -> int:
-        text = str(tok).replace("_", "")
-        return int(text, 16) if text.lower().startswith("0x") else int(text, 10)
+        return literal_int(str(tok))
 
     @v_args(meta=True)
     def int_lit(self, meta, children):
@@ -420,7 +471,13 @@ class _ToAst(Transformer_NonRecursive):
 
     @v_args(meta=True)
     def float_lit(self, meta, children):
-        return ast.FloatLit(self.span(meta), float(str(children[0]).replace("_", "")))
+        value = float(str(children[0]).replace("_", ""))
+        if math.isinf(value):
+            self.diags.add("E0212", self.span(meta), "float literal out of range for `f64`", "larger than 1.8e308").with_help(
+                "f64 holds magnitudes up to about 1.8e308; a larger literal would silently become infinity"
+            )
+            value = 0.0
+        return ast.FloatLit(self.span(meta), value)
 
     @v_args(meta=True)
     def true_lit(self, meta, children):
@@ -438,8 +495,7 @@ class _ToAst(Transformer_NonRecursive):
     def duration(self, meta, children):
         number, unit = children
         span = self.span(meta)
-        text = str(number).replace("_", "")
-        value = Fraction(text) if not text.lower().startswith("0x") else Fraction(int(text, 16))
+        value = literal_fraction(str(number))
         nanos = value * UNIT_NANOS[str(unit)]
         if nanos.denominator != 1:
             self.diags.add("E0210", span, "duration is not a whole number of nanoseconds", "finer than 1 ns")

@@ -39,6 +39,10 @@ def _parser() -> Lark:
     return Lark(head + "\n" + exprs, parser="lalr", propagate_positions=True, maybe_placeholders=True)
 
 
+# The longest scenario: 2^32-1 cycles (over a year at 10 ms).  A longer count is
+# a typo, and it would keep `rcsc sim` busy for ever.
+MAX_CYCLES = 2**32 - 1
+
 @dataclass
 class Command:
     cycle: int
@@ -274,6 +278,11 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
         return None
     if cycles <= 0:
         diags.add("E0702", cycles_span, "a scenario runs at least one cycle", "zero cycles")
+        return None
+    if cycles > MAX_CYCLES:
+        diags.add("E0702", cycles_span, f"a scenario runs at most {MAX_CYCLES} cycles", "too many cycles").with_note(
+            "the simulator and the compiled Main Programs count cycles in 32 bits of scenario time"
+        )
         return None
     sc.cycles = cycles
     for when_cycle, span in [(c.cycle, c.cycle_span or c.span) for c in sc.commands] + [(i.cycle, i.cycle_span or i.span) for i in sc.inputs] + [
