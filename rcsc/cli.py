@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from types import ModuleType
 
 import rcsc
-from rcsc import codes, safeio
+from rcsc import codes, render, safeio
 from rcsc.diagnostics import Diagnostics
 
 EXIT_OK = 0
@@ -227,7 +227,7 @@ def _run_sim(args: argparse.Namespace) -> int:
     if not run.passed:
         from rcsc.testrun import failure_text
 
-        _write(sys.stderr, failure_text(run) + "\n")
+        _write(sys.stderr, render.escape_controls(failure_text(run)) + "\n")
         return EXIT_FINDINGS
     return EXIT_OK
 
@@ -257,14 +257,12 @@ def _run_test(args: argparse.Namespace) -> int:
             report.outcomes.append(outcome)
             word = "PASS" if outcome.passed else "FAIL"
             extra = f" ({outcome.cycles} cycles, {outcome.seconds:.2f} s)" if outcome.cycles else ""
-            _write(sys.stdout, f"{word} {scn}{extra}\n")
+            _write(sys.stdout, render.escape_controls(f"{word} {scn}{extra}") + "\n")
             if not outcome.passed:
                 if outcome.message:
-                    _write(sys.stdout, "".join(f"    {line}\n" for line in outcome.message.splitlines()))
+                    _write(sys.stdout, render.escape_controls("".join(f"    {line}\n" for line in outcome.message.splitlines())))
                 if outcome.diags is not None:
-                    from rcsc import render
-
-                    _write(sys.stdout, render.render_short(outcome.diags))
+                    _write(sys.stdout, render.escape_controls(render.render_short(outcome.diags)))
     _write(sys.stdout, f"{report.passed} passed, {report.failed} failed\n")
     if args.junit:
         _emit_report(testrun.to_junit(report), args.junit)
@@ -320,7 +318,10 @@ def _run_graph(args: argparse.Namespace) -> int:
     if result.model is None:
         _report_to_stderr(result.diags)
         return EXIT_FINDINGS
-    fmt = graph.format_for(args.format, args.output)
+    try:
+        fmt = graph.format_for(args.format, args.output)
+    except graph.GraphError as exc:
+        raise UsageError(str(exc)) from exc
     if fmt == "png" and args.output is None and getattr(sys.stdout, "isatty", lambda: False)():
         raise UsageError("PNG is binary: give `-o FILE.png` (or pipe stdout to a file)")
     view = args.view or ("plan" if args.plan or args.controller else "hierarchy")

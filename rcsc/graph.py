@@ -22,6 +22,7 @@ Used by `rcsc graph` and `rcsc doc` (see docs/graph.md).
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
@@ -656,7 +657,12 @@ def format_for(fmt: str | None, output: str | None) -> str:
     """The output format: as given, else from the output file's suffix, else DOT."""
     if fmt is not None:
         return fmt
-    suffix = "." + (output or "").rsplit(".", 1)[-1].lower() if output and "." in output else ""
+    name = os.path.basename(output or "")
+    suffix = "." + name.rsplit(".", 1)[-1].lower() if "." in name.lstrip(".") else ""
+    if suffix and suffix not in SUFFIX_FORMATS:
+        # `-o graph.pdf` must not quietly write DOT text into a .pdf file.
+        known = ", ".join(sorted(SUFFIX_FORMATS))
+        raise GraphError(f"cannot tell the format of `{output}` from `{suffix}` (known: {known}); give `--format`")
     return SUFFIX_FORMATS.get(suffix, "dot")
 
 

@@ -154,6 +154,25 @@ def _char_width(ch: str) -> int:
     return 1
 
 
+# Characters that reorder text (the "trojan source" controls) are shown as
+# escapes like control characters: a report must read as it is stored.
+BIDI_CONTROLS = frozenset("\u061c\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
+
+
+def escape_controls(text: str) -> str:
+    """`text` for a terminal or log: newlines and tabs kept, every other
+    control character (C0, DEL, C1) and every bidirectional control shown as
+    a visible escape (`\\x1b`, `\\u202e`), so input cannot drive the terminal
+    (clear the screen, hide a line) or reorder what is shown."""
+    out = []
+    for ch in text:
+        if ch in "\n\t" or not (unicodedata.category(ch) == "Cc" or ch in BIDI_CONTROLS):
+            out.append(ch)
+        else:
+            out.append(f"\\x{ord(ch):02x}" if ord(ch) < 0x100 else f"\\u{ord(ch):04x}")
+    return "".join(out)
+
+
 def _display_char(ch: str) -> str:
     if ch == "\t":
         return " " * TAB_WIDTH

@@ -9,7 +9,10 @@ to create in large designs.
 from __future__ import annotations
 
 import bisect
+import re
 from dataclasses import dataclass, field
+
+_LONE_CR = re.compile("\r(?!\n)")
 
 
 @dataclass(eq=False)
@@ -21,6 +24,13 @@ class SourceFile:
     _line_starts: list[int] = field(default_factory=list, repr=False)
 
     def __post_init__(self) -> None:
+        # A byte-order mark is not part of the text (editors do not count it
+        # in columns), and a lone CR (classic Mac line ends) ends a line like
+        # LF does; replacing it by LF keeps every offset where it was.
+        if self.text.startswith("\ufeff"):
+            self.text = self.text[1:]
+        if "\r" in self.text:
+            self.text = _LONE_CR.sub("\n", self.text)
         starts = [0]
         for i, ch in enumerate(self.text):
             if ch == "\n":

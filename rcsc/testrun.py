@@ -148,6 +148,22 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict) -> Outcome
     return Outcome(design_path, scenario_path, result.passed, seconds, sc.cycles, "" if result.passed else failure_text(result), result=result)
 
 
+def _xml_safe(text: str) -> str:
+    """`text` with every character that XML 1.0 forbids (most C0 controls,
+    U+FFFE/U+FFFF, lone surrogates) shown as a visible `\\xNN` escape, so a
+    control byte in a scenario cannot make the report unreadable."""
+    out = []
+    for ch in text:
+        o = ord(ch)
+        ok = ch in "\t\n\r" or 0x20 <= o <= 0xD7FF or 0xE000 <= o <= 0xFFFD or 0x10000 <= o <= 0x10FFFF
+        out.append(ch if ok else f"\\x{o:02x}" if o < 0x100 else f"\\u{o:04x}")
+    return "".join(out)
+
+
+def _attr(text: str) -> str:
+    return quoteattr(_xml_safe(text))
+
+
 def to_junit(report: Report) -> str:
     """JUnit XML: one testsuite per design, one testcase per scenario."""
     suites: dict[str, list[Outcome]] = {}
@@ -158,13 +174,13 @@ def to_junit(report: Report) -> str:
     for design, items in suites.items():
         fails = sum(not o.passed for o in items)
         total = sum(o.seconds for o in items)
-        out.append(f'  <testsuite name={quoteattr(design)} tests="{len(items)}" failures="{fails}" time="{total:.3f}">')
+        out.append(f'  <testsuite name={_attr(design)} tests="{len(items)}" failures="{fails}" time="{total:.3f}">')
         for o in items:
             name = os.path.basename(o.scenario)
-            out.append(f'    <testcase classname={quoteattr(design)} name={quoteattr(name)} file={quoteattr(o.scenario)} time="{o.seconds:.3f}">')
+            out.append(f'    <testcase classname={_attr(design)} name={_attr(name)} file={_attr(o.scenario)} time="{o.seconds:.3f}">')
             if not o.passed:
                 first = o.message.splitlines()[0] if o.message else "failed"
-                out.append(f"      <failure message={quoteattr(first)}>{escape(o.message)}</failure>")
+                out.append(f"      <failure message={_attr(first)}>{escape(_xml_safe(o.message))}</failure>")
             out.append("    </testcase>")
         out.append("  </testsuite>")
     out.append("</testsuites>")

@@ -160,7 +160,8 @@ def _check_position(d: dict, texts: dict[str, str], where: str) -> None:
     assert isinstance(col, int) and col >= 1, f"{where}: bad column {col!r}"
     text = texts.get(d["file"])
     if text is not None:
-        lines = text.split("\n")
+        # A line ends at LF, CRLF or a lone CR; a byte-order mark is not text.
+        lines = re.sub("\r(?!\n)", "\n", text.removeprefix("\ufeff")).split("\n")
         assert line <= len(lines), f"{where}: line {line} beyond the file's {len(lines)} lines"
         assert col <= len(lines[line - 1]) + 1, f"{where}: column {col} beyond line {line} ({len(lines[line - 1])} chars)"
 
@@ -758,7 +759,8 @@ def mutate(text: str, seed: int) -> str:
         if op <= 7:
             text = "".join(toks)
             continue
-        lines = text.split("\n")
+        # A line ends at LF, CRLF or a lone CR; a byte-order mark is not text.
+        lines = re.sub("\r(?!\n)", "\n", text.removeprefix("\ufeff")).split("\n")
         a, b = r.randrange(len(lines)), r.randrange(len(lines))
         if op == 8:  # delete lines
             del lines[a:a + r.randint(1, 3)]

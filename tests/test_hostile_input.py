@@ -1,0 +1,115 @@
+"""Hostile and careless input: answered at once, read as written, reported safely.
+
+Each test is one way a design, a scenario or a command line used to hang
+rcsc, crash it, or produce output that breaks its consumer (a terminal, a
+JUnit reader, a file named for another format).
+"""
+
+from __future__ import annotations
+
+import time
+import xml.dom.minidom
+from pathlib import Path
+
+import pytest
+
+from rcsc.cli import main
+from rcsc.parse import TOO_LARGE, literal_fraction, literal_int
+
+ROOT = Path(__file__).resolve().parent.parent
+CASES = ROOT / "tests" / "cases"
+SUBMARINE = ROOT / "examples" / "submarine" / "submarine.rcs"
+
+DESIGN = """design d
+
+const SPEED: f64 = 2.0
+
+controller TOP level 1 budget 1 ms {
+    verb RUN(speed: f64)
+    plan RUN {
+        E0: cmd.speed > SPEED | new -> done;
+        E1: not (cmd.speed > SPEED) | new -> error(1);
+    }
+}
+
+cpu main {
+    heartbeat 10 ms
+    schedule TOP
+}
+"""
+
+
+@pytest.mark.parametrize("text", ["0e100000000", "1e100000000", "1e-100000000", "9" * 100000 + "e-99999", "0." + "0" * 100000 + "1"])
+def test_duration_literals_take_no_time(text: str) -> None:
+    start = time.monotonic()
+    value = literal_fraction(text)
+    assert time.monotonic() - start < 0.5
+    assert value == 0 or value >= TOO_LARGE or value <= 1 or value.denominator > 1
+
+
+def test_huge_integer_literal_is_out_of_range_not_a_crash(tmp_path: Path, capsys) -> None:
+    assert literal_int("1" * 5000) == TOO_LARGE
+    design = tmp_path / "d.rcs"
+    design.write_text(DESIGN.replace("const SPEED: f64 = 2.0", "const SPEED: f64 = 2.0\nconst N: i64 = " + "7" * 5000))
+    start = time.monotonic()
+    assert main(["check", str(design), "--format", "short"]) == 1
+    out = capsys.readouterr().out
+    assert "error[E0207]: integer literal out of range for `i64`" in out and "internal" not in out
+    assert time.monotonic() - start < 5
+
+
+def test_a_scenario_duration_with_a_huge_exponent_is_answered_at_once(tmp_path: Path, capsys) -> None:
+    design = tmp_path / "d.rcs"
+    design.write_text(DESIGN)
+    scn = tmp_path / "s.scn"
+    scn.write_text("cycles 3\nat 1: TOP.RUN(speed = 3.0)\nexpect always: 0e999999999999 s == 0 s\n")
+    start = time.monotonic()
+    assert main(["sim", str(design), "--scenario", str(scn), "-o", str(tmp_path / "t.jsonl")]) == 0
+    assert time.monotonic() - start < 5
+
+
+def test_cr_only_and_bom_files_report_real_lines(tmp_path: Path, capsys) -> None:
+    text = (CASES / "E0212_float_literal_range.rcs").read_text()
+    (tmp_path / "cr.rcs").write_bytes(text.replace("\n", "\r").encode())
+    (tmp_path / "bom.rcs").write_bytes(b"\xef\xbb\xbf" + text.encode())
+    (tmp_path / "crlf.rcs").write_bytes(text.replace("\n", "\r\n").encode())
+    for name in ("cr.rcs", "bom.rcs", "crlf.rcs"):
+        assert main(["check", str(tmp_path / name), "--format", "short"]) == 1
+        out = capsys.readouterr().out
+        assert f"{name}:5:19: error[E0212]" in out, out
+        assert "E0002" not in out and "E0001" not in out
+
+
+def _failing_scenario(tmp_path: Path, comment: str, name: str = "bad.scn") -> Path:
+    (tmp_path / "d.rcs").write_text(DESIGN)
+    scn = tmp_path / name
+    scn.write_text(f"// {comment}\ncycles 3\nat 1: TOP.RUN(speed = 1.0)\nexpect final: TOP.done // \x1b[2J{comment}\n")
+    return scn
+
+
+def test_junit_stays_well_formed_with_control_bytes(tmp_path: Path, capsys) -> None:
+    _failing_scenario(tmp_path, "comment", "bell\x07escape\x1b\x01.scn")
+    junit = tmp_path / "report.xml"
+    assert main(["test", str(tmp_path), "--junit", str(junit)]) == 1
+    doc = xml.dom.minidom.parse(str(junit))  # raises if not well-formed XML 1.0
+    failures = doc.getElementsByTagName("failure")
+    assert len(failures) == 1
+
+
+def test_terminal_output_escapes_control_characters(tmp_path: Path, capsys) -> None:
+    # The file name carries the escapes: it is printed in the PASS/FAIL line
+    # and in the expectation's location.
+    _failing_scenario(tmp_path, "plain", "bad\x1b[2J\u202e.scn")
+    assert main(["test", str(tmp_path)]) == 1
+    out = capsys.readouterr().out
+    assert "\x1b" not in out and "\u202e" not in out
+    assert "\\x1b[2J" in out and "0 passed, 1 failed" in out
+
+
+def test_graph_refuses_an_output_name_it_cannot_write(tmp_path: Path, capsys) -> None:
+    target = tmp_path / "x.pdf"
+    assert main(["graph", str(SUBMARINE), "-o", str(target)]) == 2
+    assert "cannot tell the format" in capsys.readouterr().err
+    assert not target.exists()
+    assert main(["graph", str(SUBMARINE), "-o", str(target), "--format", "dot"]) == 0
+    assert target.read_text().startswith("//")
