@@ -31,7 +31,7 @@ from urllib.parse import quote
 
 from rcsc.codes import CODES, Code
 from rcsc.diagnostics import Diagnostic, Diagnostics, Severity
-from rcsc.source import SourceFile, Span
+from rcsc.source import BIDI_CONTROLS, SourceFile, Span
 
 # A tab is shown as this many spaces; carets are moved to match.
 TAB_WIDTH = 4
@@ -157,8 +157,9 @@ def _char_width(ch: str) -> int:
 def _display_char(ch: str) -> str:
     if ch == "\t":
         return " " * TAB_WIDTH
-    # Control characters in a broken input must not drive the terminal.
-    if unicodedata.category(ch) == "Cc":
+    # Control characters in a broken input must not drive the terminal, nor
+    # bidirectional controls reorder the line shown.
+    if unicodedata.category(ch) == "Cc" or ch in BIDI_CONTROLS:
         return "\ufffd"
     return ch
 
