@@ -81,17 +81,23 @@ class FoldEnv(Env):
 
 
 def _literal_values(node: ast.Expr):
-    """The integer literals of an untyped expression, with the sign of a `-` written on one."""
+    """The integer literals of an untyped expression (`Checker._untyped`), with the
+    sign of a `-` written on one (`-2147483648` fits in `i32`)."""
     if isinstance(node, ast.IntLit):
         yield node.value
-    elif isinstance(node, ast.Unary) and isinstance(node.operand, ast.IntLit):
-        yield -node.operand.value
-    else:
-        for child in (getattr(node, "operand", None), getattr(node, "left", None), getattr(node, "right", None),
-                      getattr(node, "then", None), getattr(node, "else_", None)):
-            if child is not None:
-                yield from _literal_values(child)
-        for arg in getattr(node, "args", ()) or ():
+    elif isinstance(node, ast.Unary):
+        if isinstance(node.operand, ast.IntLit):
+            yield -node.operand.value
+        else:
+            yield from _literal_values(node.operand)
+    elif isinstance(node, ast.Binary):
+        yield from _literal_values(node.left)
+        yield from _literal_values(node.right)
+    elif isinstance(node, ast.IfExpr):
+        yield from _literal_values(node.then)
+        yield from _literal_values(node.else_)
+    elif isinstance(node, ast.Call):
+        for arg in node.args:
             yield from _literal_values(arg.value)
 
 
