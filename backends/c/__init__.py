@@ -25,7 +25,7 @@ from rcsc.backend import (
 from rcsc.backends.c.tables import main_tables
 from rcsc.backends.c.target import CTarget, _strip_parens
 from rcsc.simulate import zero_value
-from rcsc.types import EnumType, RecordType
+from rcsc.types import I32, EnumType, RecordType
 
 RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c")
 
@@ -222,7 +222,7 @@ class CBackend(CTarget):
         elif nxt.kind == "done":
             body += [f"{own}.head.status = RCS_DONE;", f"{own}.head.state = ST_DONE;", "self->plan = 0;"]
         elif nxt.kind == "error":
-            body += [f"{own}.head.status = RCS_ERROR;", f"{own}.head.error_code = {nxt.code};",
+            body += [f"{own}.head.status = RCS_ERROR;", f"{own}.head.error_code = {self.literal(nxt.code, I32)};",
                      f"{own}.head.state = ST_ERROR;", "self->plan = 0;"]
         guard_text = "otherwise" if r.guard is None else self.comment(r.guard_span.text)
         head = f"if ({cond}) {{" if cond else "{"
