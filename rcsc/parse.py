@@ -9,11 +9,8 @@ the way an engineer reads them.
 
 from __future__ import annotations
 
-<<<<<<< HEAD
 import math
-=======
 import unicodedata
->>>>>>> literals
 from fractions import Fraction
 from functools import lru_cache
 from importlib import resources
