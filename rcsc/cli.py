@@ -284,7 +284,7 @@ def _add_budget_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_budget(args: argparse.Namespace) -> int:
-    from rcsc.checks.timing import format_budget_table
+    from rcsc.checks.frames import format_budget_table
 
     result = _check(args.path)
     if result.model is None:

@@ -35,7 +35,7 @@ from markupsafe import Markup
 
 from rcsc import graph
 from rcsc import model as m
-from rcsc.checks.timing import fmt_ns
+from rcsc.checks.frames import fmt_ns
 from rcsc.diagnostics import Diagnostic, Severity
 from rcsc.types import DurationType, EnumType, RecordType, Type
 

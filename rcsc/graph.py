@@ -29,7 +29,7 @@ import textwrap
 from dataclasses import dataclass, field
 
 from rcsc import model as m
-from rcsc.checks.timing import fmt_ns
+from rcsc.checks.frames import fmt_ns
 from rcsc.diagnostics import Diagnostic
 from rcsc.source import Span
 

@@ -172,3 +172,48 @@ def test_csv_and_vcd_show_the_observer_view_per_tick(design, tmp_path) -> None:
     vcd = tmp_path / "run.vcd"
     assert main(["sim", str(SIM / "multicpu.rcs"), "--scenario", str(scn), "-o", str(vcd)]) == 0
     assert "#90000000" in vcd.read_text()  # tick 9 is at 80 ms; VCD times are ticks * base tick
+
+
+# ---- rcsc budget: rate groups and frames -------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["rates", "multicpu"])
+def test_budget_table_golden(name, golden, capsys) -> None:
+    from rcsc.cli import main
+
+    assert main(["budget", str(SIM / f"{name}.rcs")]) == 0
+    golden(f"budget/{name}.txt", capsys.readouterr().out)
+
+
+def test_frames_follow_the_dividers() -> None:
+    from rcsc.checks.frames import frames, hyperperiod, worst_frame
+
+    d = check_path(str(SIM / "rates.rcs")).model
+    cpu = d.cpus["main"]
+    assert hyperperiod(d, cpu) == 10
+    got = [(f.cycles, f.controllers, f.total_ns) for f in frames(d, cpu)]
+    assert got == [
+        ([1], ["PLAN", "PRIM", "SERVO"], 6_500_000),
+        ([2, 3, 4, 5, 7, 8, 9, 10], ["SERVO"], 1_500_000),
+        ([6], ["PRIM", "SERVO"], 3_500_000),
+    ]
+    assert worst_frame(d, cpu).cycles == [1]
+
+
+def test_budget_reports_a_frame_overrun(capsys) -> None:
+    from rcsc.cli import main
+
+    code = main(["budget", str(Path(__file__).parent / "cases" / "E0600_frame_overrun.rcs")])
+    out, err = capsys.readouterr()
+    assert code != 0
+    assert "cycle 1      11 ms  OVERRUN 1 ms  A, B\n" in out and "cycle 2       6 ms  slack 4 ms    A\n" in out
+    assert "error[E0600]" in err and "not the heaviest frame" in err
+
+
+def test_single_rate_table_is_unchanged(capsys) -> None:
+    from rcsc.cli import main
+
+    assert main(["budget", str(Path(__file__).parents[1] / "examples" / "submarine" / "submarine.rcs")]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[:2] == ["cpu MAIN: heartbeat 30 ms", "  controller   level     budget   share"]
+    assert out.splitlines()[-1] == "  slack                 23.5 ms" and "frames" not in out
