@@ -131,8 +131,6 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict) -> Outcome
         return Outcome(design_path, scenario_path, False, 0.0, message=str(checked))
     if not checked.ok or checked.model is None:
         return Outcome(design_path, scenario_path, False, 0.0, message="the design has errors (run `rcsc check`)", diags=checked.diags)
-    if len(checked.model.cpus) != 1:
-        return Outcome(design_path, scenario_path, False, 0.0, message="the simulator runs single-CPU designs")
     diags = Diagnostics()
     try:
         with open(scenario_path, encoding="utf-8") as fh:

@@ -69,12 +69,17 @@ def check(design: Design, diags: Diagnostics) -> None:
         period = c.period_ns
         if c.cpu is None or period <= 0:
             continue
-        steps = "cycles" if c.divider == 1 else "steps"
+        # Ages count base ticks (stamps are deadlines of any CPU), everything
+        # else this controller's own steps (`in_state`, its timers).
+        with_age = _compared_with_age(c)
         for span, ns in _durations(c):
-            if ns % period:
-                cycles = -(-ns // period)
-                diags.add("W0601", span, f"{fmt_ns(ns)} is not a whole number of {fmt_ns(period)} {steps}", f"rounds up to {cycles} {steps}").with_help(
-                    f"write `{fmt_ns(cycles * period)}` to say what happens"
+            unit, steps = period, "cycles" if c.divider == 1 else "steps"
+            if (span.start, span.end) in with_age:
+                unit, steps = design.base_tick_ns or period, "base ticks"
+            if ns % unit:
+                cycles = -(-ns // unit)
+                diags.add("W0601", span, f"{fmt_ns(ns)} is not a whole number of {fmt_ns(unit)} {steps}", f"rounds up to {cycles} {steps}").with_help(
+                    f"write `{fmt_ns(cycles * unit)}` to say what happens"
                 )
 
     _check_harmonic(design, diags)
@@ -135,13 +140,24 @@ def _in_cpu_order(design: Design, names: set[str]) -> list[str]:
     return [n for n in design.cpus if n in names]
 
 
+def _is_age(e: m.Expr) -> bool:
+    return isinstance(e, m.Age) or (isinstance(e, m.SubView) and e.attr == "age")
+
+
+def _compared_with_age(c: m.Controller) -> set[tuple[int, int]]:
+    """Spans of the duration constants that a comparison puts against an age."""
+    out = set()
+    for e in m.controller_exprs(c):
+        for x in m.walk_expr(e):
+            if isinstance(x, m.Binary) and x.op in ("<", "<=", ">", ">=", "==", "!="):
+                sides = (x.left, x.right)
+                if any(_is_age(y) for side in sides for y in m.walk_expr(side)):
+                    out.update((y.span.start, y.span.end) for side in sides for y in m.walk_expr(side) if isinstance(y, m.Const))
+    return out
+
+
 def _durations(c: m.Controller):
-    exprs = []
-    for stmts in [c.pre, c.post] + [r.jobs for p in c.plans.values() for r in p.rules]:
-        for s in m.walk_stmts(stmts):
-            exprs.extend(m.stmt_exprs(s))
-    for p in c.plans.values():
-        exprs.extend(r.guard for r in p.rules if r.guard is not None)
+    exprs = m.controller_exprs(c)
     seen = set()
     for e in exprs:
         for x in m.walk_expr(e):
