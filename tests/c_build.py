@@ -88,7 +88,7 @@ def reference_trace(design: Path, scn: Path) -> bytes:
         sc = text_to_scenario(SourceFile(str(scn), scn.read_text(encoding="utf-8")), result.model, result.diags)
         assert sc is not None, f"{scn} does not load"
         run = run_scenario(result.model, sc)
-        _REFERENCE[scn] = to_jsonl(result.model, run.snapshots).encode("utf-8")
+        _REFERENCE[scn] = to_jsonl(result.model, run.trace_snapshots).encode("utf-8")
     return _REFERENCE[scn]
 
 

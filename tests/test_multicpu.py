@@ -217,3 +217,48 @@ def test_single_rate_table_is_unchanged(capsys) -> None:
     out = capsys.readouterr().out
     assert out.splitlines()[:2] == ["cpu MAIN: heartbeat 30 ms", "  controller   level     budget   share"]
     assert out.splitlines()[-1] == "  slack                 23.5 ms" and "frames" not in out
+
+
+# ---- faults on a single-CPU design, and the CLI ----------------------------------------------
+
+
+def test_single_cpu_stop_ends_the_trace_but_not_the_expectations(tmp_path, capsys) -> None:
+    from rcsc.cli import main
+
+    scn = tmp_path / "stop.scn"
+    # ahead_paper: PR and TB on one 30 ms CPU.  After the stop at tick 5 the
+    # trace has no more lines, and expectations see the state of cycle 4.
+    scn.write_text("cycles 8\nat 1: PR.AHEAD(speed = 5)\nat 5: stop MAIN\nexpect at 8: PR.echo == 1\n")
+    code = main(["sim", str(SIM / "ahead_paper.rcs"), "--scenario", str(scn)])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    lines = out.splitlines()
+    assert [int(x.split(",")[0].split(":")[1]) for x in lines] == [1, 2, 3, 4]
+
+
+def test_single_cpu_freeze_keeps_the_status(tmp_path) -> None:
+    d = check_path(str(SIM / "ahead_paper.rcs")).model
+    r = run(d, "cycles 6\nat 1: PR.AHEAD(speed = 5)\nat 2: freeze TB\n")
+    tb = [s.ctrl["TB"] for s in r.snapshots]
+    assert tb[1:] == [tb[0]] * 5  # TB stepped in cycle 1 only
+    assert [s.cycle for s in r.trace_snapshots] == [1, 2, 3, 4, 5, 6]
+
+
+def test_sim_cli_writes_the_multi_cpu_trace(tmp_path, capsys) -> None:
+    import json
+
+    from rcsc.cli import main
+
+    scn = tmp_path / "t.scn"
+    scn.write_text("cycles 6\nat 1: TOP.RUN()\n")
+    assert main(["sim", str(SIM / "multicpu.rcs"), "--scenario", str(scn)]) == 0
+    out = capsys.readouterr().out
+    rows = [json.loads(x) for x in out.splitlines()]
+    assert [(r["cpu"], r["cycle"], r["t"]) for r in rows] == [
+        ("planner", 1, 0), ("servo", 1, 0), ("servo", 2, 10_000_000), ("planner", 2, 20_000_000),
+        ("servo", 3, 20_000_000), ("servo", 4, 30_000_000), ("planner", 3, 40_000_000), ("servo", 5, 40_000_000),
+        ("servo", 6, 50_000_000),
+    ]
+    assert list(rows[0]) == ["cpu", "cycle", "t", "gm", "ctrl"]
+    assert main(["sim", str(SIM / "multicpu.rcs"), "--scenario", str(scn)]) == 0
+    assert capsys.readouterr().out == out  # same input, same bytes
