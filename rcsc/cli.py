@@ -255,7 +255,8 @@ def _run_test(args: argparse.Namespace) -> int:
             outcome = testrun.run_one(design, scn, cache)
             report.outcomes.append(outcome)
             word = "PASS" if outcome.passed else "FAIL"
-            extra = f" ({outcome.cycles} cycles, {outcome.seconds:.2f} s)" if outcome.cycles else ""
+            unit = "ticks" if outcome.result is not None and outcome.result.multi_cpu else "cycles"
+            extra = f" ({outcome.cycles} {unit}, {outcome.seconds:.2f} s)" if outcome.cycles else ""
             _write(sys.stdout, f"{word} {scn}{extra}\n")
             if not outcome.passed:
                 if outcome.message:

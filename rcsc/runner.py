@@ -73,6 +73,7 @@ class RunResult:
     results: list[ExpectResult]
     cpu_cycles: list[CpuSnapshot] = field(default_factory=list)  # multi-CPU designs: one per CPU cycle run
     trace_snapshots: list[Snapshot] = field(default_factory=list)  # single-CPU designs: the cycles that ran
+    multi_cpu: bool = False  # several CPUs: snapshots are per base tick
 
     @property
     def passed(self) -> bool:
@@ -183,4 +184,4 @@ def run_scenario(design: m.Design, sc: Scenario, externs: dict | None = None) ->
         elif system.ran:
             ran.append(snaps[-1])
     results = [evaluate_expectation(design, x, snaps) for x in sc.expects]
-    return RunResult(sc, snaps, results, cycles, ran)
+    return RunResult(sc, snaps, results, cycles, ran, multi)

@@ -262,3 +262,11 @@ def test_sim_cli_writes_the_multi_cpu_trace(tmp_path, capsys) -> None:
     assert list(rows[0]) == ["cpu", "cycle", "t", "gm", "ctrl"]
     assert main(["sim", str(SIM / "multicpu.rcs"), "--scenario", str(scn)]) == 0
     assert capsys.readouterr().out == out  # same input, same bytes
+
+
+def test_failures_of_multi_cpu_scenarios_name_ticks(design) -> None:
+    from rcsc.testrun import failure_text
+
+    r = run(design, "cycles 10\nat 1: TOP.RUN()\nexpect at 7: LOW.done\n")
+    assert not r.passed and r.multi_cpu
+    assert "false at tick 7: LOW.status = EXEC" in failure_text(r)
