@@ -270,3 +270,38 @@ def test_failures_of_multi_cpu_scenarios_name_ticks(design) -> None:
     r = run(design, "cycles 10\nat 1: TOP.RUN()\nexpect at 7: LOW.done\n")
     assert not r.passed and r.multi_cpu
     assert "false at tick 7: LOW.status = EXEC" in failure_text(r)
+
+
+# ---- an independent reading of the trace: rule 3 of the crossing semantics ------------------
+
+
+@pytest.mark.parametrize(
+    "design_path, scenario",
+    [
+        (SIM / "multicpu.rcs", "cycles 40\nat 1: TOP.RUN()\nat 3: load = 0.5\nat 17: stop servo\n"),
+        (Path(__file__).parents[1] / "examples/machine_tool/machine_tool.rcs", (Path(__file__).parents[1] / "examples/machine_tool/scenarios/full_cut.scn").read_text()),
+        (Path(__file__).parents[1] / "examples/machine_tool/machine_tool.rcs", (Path(__file__).parents[1] / "examples/machine_tool/scenarios/servo_cpu_stops.scn").read_text()),
+    ],
+    ids=["multicpu-stop", "machine_tool-full_cut", "machine_tool-servo_stops"],
+)
+def test_reader_copy_is_the_newest_published_by_a_deadline(design_path, scenario) -> None:
+    """Each CPU line's copy of a GM variable written on another CPU equals the writer's
+    copy after its latest cycle whose deadline is at or before the reader's release."""
+    d = check_path(str(design_path)).model
+    r = run(d, scenario)
+    period = {name: cpu.heartbeat_ns for name, cpu in d.cpus.items()}
+    by_cpu: dict[str, list] = {}
+    for line in r.cpu_cycles:
+        by_cpu.setdefault(line.cpu, []).append(line)
+    checked = 0
+    for x in d.crossings:
+        if x.kind != "gm":
+            continue
+        writer_lines = by_cpu.get(x.writer_cpu, [])
+        for reader in x.reader_cpus:
+            for line in by_cpu.get(reader, []):
+                done = [w for w in writer_lines if w.t + period[x.writer_cpu] <= line.t]
+                expected = done[-1].gm[x.name] if done else d.gm[x.name].init
+                assert line.gm[x.name] == expected, (x.name, reader, line.t)
+                checked += 1
+    assert checked > 20
