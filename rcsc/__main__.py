@@ -1,7 +1,5 @@
 """`python -m rcsc` runs the command-line interface."""
 
-import sys
+from rcsc.cli import entry
 
-from rcsc.cli import main
-
-sys.exit(main())
+entry()

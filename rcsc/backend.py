@@ -379,6 +379,13 @@ class Target:
             )
             d.with_label(cpus[0].name_span, "first CPU")
             d.with_note("exchanging buffers between CPUs needs a transport, which no target has yet")
+        for c in self.design.controllers.values():
+            if c.divider > 1:
+                d = diags.add("E0801", c.period_span or c.name_span, f"the {self.name} target steps every controller every cycle; `{c.name}` has a period", "divided rate")
+                d.with_note("`rcsc sim` and `rcsc test` run divided-rate controllers")
+        for c, age in _gm_ages(self.design):
+            d = diags.add("E0801", age.span, f"the {self.name} target does not keep Global Memory stamps for `age({age.name})`", "age of Global Memory")
+            d.with_note(f"in `{c.name}`; `rcsc sim` and `rcsc test` measure it")
 
     # ---- comments ------------------------------------------------------------------
 
@@ -458,3 +465,12 @@ def write_files(files: list[OutFile], out_dir: str, entry_files: tuple[str, ...]
     """
     tree = [safeio.TreeFile(f.path, f.text.encode("utf-8"), f.user, f.path in entry_files) for f in files]
     return safeio.write_tree(tree, out_dir, _is_generated)
+
+
+def _gm_ages(design: m.Design):
+    """(controller, `age(V)` node) for every age of a Global Memory variable, in source order."""
+    for c in design.controllers.values():
+        for e in sorted(m.controller_exprs(c), key=lambda x: x.span.start):
+            for x in m.walk_expr(e):
+                if isinstance(x, m.Age):
+                    yield c, x

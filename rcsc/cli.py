@@ -198,11 +198,6 @@ def _run_sim(args: argparse.Namespace) -> int:
         _report_to_stderr(result.diags)
         return EXIT_FINDINGS
     design = result.model
-    if len(design.cpus) != 1:
-        diags = Diagnostics()
-        diags.add("E0606", design.span, f"design `{design.name}` has {len(design.cpus)} CPUs", "several CPUs")
-        _report_to_stderr(diags)
-        return EXIT_FINDINGS
     try:
         text = safeio.read_input(args.scenario).decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
@@ -217,12 +212,14 @@ def _run_sim(args: argparse.Namespace) -> int:
     if fmt is None:
         suffix = (args.output or "").rsplit(".", 1)[-1].lower()
         fmt = suffix if suffix in TRACE_FORMATS else "jsonl"
+    # Several CPUs: the JSON-lines trace has one line per CPU cycle; CSV and
+    # VCD show the observer's view (what expectations see) per base tick.
     if fmt == "jsonl":
-        text = trace.to_jsonl(design, run.snapshots)
+        text = trace.cycles_to_jsonl(design, run.cpu_cycles) if len(design.cpus) > 1 else trace.to_jsonl(design, run.trace_snapshots)
     elif fmt == "csv":
         text = trace.to_csv(design, run.snapshots)
     else:
-        text = trace.to_vcd(design, run.snapshots, design.cpus[next(iter(design.cpus))].heartbeat_ns)
+        text = trace.to_vcd(design, run.snapshots, design.base_tick_ns)
     _emit_report(text, args.output)
     if not run.passed:
         from rcsc.testrun import failure_text
@@ -256,7 +253,8 @@ def _run_test(args: argparse.Namespace) -> int:
             outcome = testrun.run_one(design, scn, cache)
             report.outcomes.append(outcome)
             word = "PASS" if outcome.passed else "FAIL"
-            extra = f" ({outcome.cycles} cycles, {outcome.seconds:.2f} s)" if outcome.cycles else ""
+            unit = "ticks" if outcome.result is not None and outcome.result.multi_cpu else "cycles"
+            extra = f" ({outcome.cycles} {unit}, {outcome.seconds:.2f} s)" if outcome.cycles else ""
             _write(sys.stdout, render.escape_controls(f"{word} {scn}{extra}") + "\n")
             if not outcome.passed:
                 if outcome.message:
@@ -283,7 +281,7 @@ def _add_budget_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_budget(args: argparse.Namespace) -> int:
-    from rcsc.checks.timing import format_budget_table
+    from rcsc.checks.frames import format_budget_table
 
     result = _check(args.path)
     if result.model is None:
@@ -498,6 +496,24 @@ def _main(argv: list[str] | None) -> int:
     code = args.run(args)
     sys.stdout.flush()  # a broken pipe surfaces here, inside the handlers
     return code
+
+
+def entry() -> None:
+    """The `rcsc` command and `python -m rcsc`: `main`, then exit.
+
+    After Ctrl-C the process ends at once, without running finalizers: a
+    library interrupted in the middle of building an object (z3 creating a
+    context, say) may otherwise print its own traceback while Python shuts
+    down, after rcsc has reported the interruption."""
+    code = main()
+    if code == EXIT_INTERRUPTED:
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):
+                continue
+        os._exit(code)
+    sys.exit(code)
 
 
 def main(argv: list[str] | None = None) -> int:

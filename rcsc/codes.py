@@ -340,18 +340,26 @@ Simplify the condition, for example by computing a non-linear term in `pre`.
 """),
     # ---- timing -------------------------------------------------------------
     ("E0600", _E, "CPU budget exceeds its heartbeat", """
-The sum of the budgets (worst-case step times) of the controllers scheduled on a
-CPU, plus its declared overhead, must fit in one heartbeat period (paper
-sections 3.8.6 and 3.9). Otherwise cycles overrun.
+The sum of the budgets (worst-case step times) of the controllers due in a
+cycle of a CPU, plus its declared overhead, must fit in one heartbeat period
+(paper sections 3.8.6 and 3.9): the frame rule. Otherwise cycles overrun.
+Every controller steps in the CPU's first cycle whatever its `period`, so
+that frame holds all of them; `rcsc budget` lists every frame.
 """),
     ("W0601", _W, "duration is not a whole number of cycles", """
-A time in a plan (`in_state >= 45 ms`) is measured in whole cycles of the CPU
-the controller runs on. A duration that is not a multiple of the heartbeat is
-rounded up to the next whole cycle; write the rounded value to say what happens.
+A time in a plan (`in_state >= 45 ms`) is measured in whole steps of the
+controller: its CPU's heartbeat, or its `period` if it runs at a divided rate.
+A duration that is not a multiple of it is rounded up to the next whole step;
+write the rounded value to say what happens. A duration compared with an
+`age` is measured in base ticks (the shortest heartbeat of the design).
 """),
-    ("E0602", _E, "CPUs with non-harmonic periods exchange data", """
-When controllers on two CPUs exchange buffers, one heartbeat must be a whole
-multiple of the other so that data arrive at a fixed phase.
+    ("E0602", _E, "CPUs with non-harmonic heartbeats", """
+All CPUs run on one time base whose tick is the shortest heartbeat, and
+buffers cross between CPUs at the deadlines of their writers' cycles. So of
+any two heartbeats one must be a whole multiple of the other: then every
+release and deadline falls on a tick and data arrive at a fixed phase. This
+holds for CPUs that exchange no data too, because scenarios address all CPUs
+in ticks.
 """),
     ("E0603", _E, "controller is not scheduled", """
 Every controller must appear in exactly one CPU `schedule`; a controller that is
@@ -361,10 +369,11 @@ never scheduled never runs.
 A controller appears twice in schedules (on one CPU or on two). Each controller
 runs exactly once per cycle of exactly one CPU.
 """),
-    ("E0606", _E, "the simulator runs single-CPU designs", """
-The reference simulator (`rcsc sim`, `rcsc test`) steps one CPU's schedule. A
-design with several CPUs is checked, but simulating the buffer exchange between
-CPUs is not implemented yet.
+    ("E0607", _E, "controller period is not a whole number of heartbeats", """
+A controller's `period D` says it steps on every n-th cycle of its CPU, so D
+must be a whole multiple n of the CPU's heartbeat (n >= 1). A controller with
+`period 50 ms` on a 20 ms CPU would have no fixed place in the cycle; choose a
+multiple (40 ms, 60 ms) or move it to a CPU whose heartbeat divides 50 ms.
 """),
     # ---- code generation ----------------------------------------------------
     ("E0800", _E, "the target cannot build a design with several CPUs", """
@@ -373,6 +382,12 @@ controllers on different CPUs share would need a transport (shared memory,
 a network) to travel between them, and no target has one yet. Rather than
 emit code that silently loses those buffers, the build is refused. Put the
 design on one CPU to build it, or check it with `rcsc check` meanwhile.
+"""),
+    ("E0801", _E, "the target does not implement divided rates or Global Memory ages yet", """
+`rcsc sim` and `rcsc test` run controllers with a `period` longer than their
+CPU's heartbeat and measure `age(V)` of Global Memory variables; the code
+generators do not yet. Rather than emit a program that steps such a controller
+every cycle or reads a made-up age, the build is refused.
 """),
     # ---- scenarios ----------------------------------------------------------
     ("E0700", _E, "operator command to a controller below the top", """
@@ -398,6 +413,11 @@ A name that CTRL does not have is almost always a typo.
     ("E0704", _E, "missing or repeated scenario setting", """
 A scenario says exactly once how many cycles it runs: `cycles 200`. Without it
 the run has no end; with two `cycles` lines it is ambiguous which one counts.
+"""),
+    ("E0705", _E, "fault injection names no CPU or controller", """
+`at N: stop CPU` stops a CPU (it runs no more cycles) and `at N: freeze CTRL`
+freezes one controller (it is not stepped any more). The name after `stop` must
+be one of the design's CPUs and the name after `freeze` one of its controllers.
 """),
     ("E0605", _E, "design has no CPU", """
 A design needs at least one `cpu` with a heartbeat and a schedule to say where

@@ -1,54 +1,26 @@
 """Timing checks (paper sections 3.8.6 and 3.9).
 
-Every controller runs on exactly one CPU; per CPU the sum of the budgets of
-its controllers plus its overhead fits in the heartbeat; durations used by a
-controller are whole multiples of its CPU's heartbeat (else they round up);
-CPUs that exchange data have harmonic periods.  `budget_table` is the table
-that `rcsc budget` and the notes print.
+Every controller runs on exactly one CPU, every `divider`-th cycle of it
+(`period D`, a whole multiple of the heartbeat); per CPU and per cycle the
+budgets of the controllers due in that cycle plus the overhead fit in the
+heartbeat (the frame rule, see `rcsc.checks.frames`); durations used by a
+controller are whole multiples of its own period (else they round up); all
+heartbeats are harmonic.  The check records each controller's CPU, divider
+and period, and the design's crossing buffers (`Design.crossings`), for the
+simulator and the backends.
 """
 
 from __future__ import annotations
 
 from rcsc import model as m
+from rcsc.checks.frames import fmt_ns, worst_frame
 from rcsc.diagnostics import Diagnostics
 from rcsc.model import Design
 from rcsc.types import DURATION
 
 
-def fmt_ns(ns: int) -> str:
-    """A duration in the largest unit that is at least 1, exact (3 decimals reach the next unit)."""
-    sign = "-" if ns < 0 else ""
-    ns = abs(ns)
-    for unit, scale in (("s", 1_000_000_000), ("ms", 1_000_000), ("us", 1_000)):
-        if ns >= scale and ns % (scale // 1000) == 0:
-            text = f"{ns / scale:.3f}".rstrip("0").rstrip(".") if ns % scale else str(ns // scale)
-            return f"{sign}{text} {unit}"
-    return f"{sign}{ns} ns"
-
-
 def budget_table(design: Design, cpu: m.Cpu) -> list[tuple[str, int]]:
     return [(u.name, design.controllers[u.name].budget_ns) for u in cpu.schedule]
-
-
-def format_budget_table(design: Design) -> str:
-    """The timing table of every CPU: each controller's budget and its share of the heartbeat."""
-    out = []
-    for cpu in design.cpus.values():
-        hb = cpu.heartbeat_ns
-        out.append(f"cpu {cpu.name}: heartbeat {fmt_ns(hb)}")
-        rows = [(n, str(design.controllers[n].level) + (" sim" if design.controllers[n].simulator else ""), b) for n, b in budget_table(design, cpu)]
-        if cpu.overhead_ns:
-            rows.append(("(overhead)", "", cpu.overhead_ns))
-        total = sum(b for _, _, b in rows)
-        width = max([len(r[0]) for r in rows] + [len("controller"), len("total")])
-        out.append(f"  {'controller':<{width}}  {'level':<6} {'budget':>9} {'share':>7}")
-        for name, level, b in rows + [("total", "", total)]:
-            share = f"{100.0 * b / hb:6.1f}%" if hb > 0 else "      -"
-            out.append(f"  {name:<{width}}  {level:<6} {fmt_ns(b):>9} {share}")
-        slack = hb - total
-        out.append(f"  {'slack' if slack >= 0 else 'OVERRUN':<{width}}  {'':<6} {fmt_ns(abs(slack)):>9}")
-        out.append("")
-    return "\n".join(out)
 
 
 def check(design: Design, diags: Diagnostics) -> None:
@@ -73,11 +45,14 @@ def check(design: Design, diags: Diagnostics) -> None:
                 f"add `{c.name}` to a `schedule`"
             )
 
+    _check_periods(design, diags)
+
     for cpu in design.cpus.values():
         if cpu.heartbeat_ns <= 0:
             continue
-        table = budget_table(design, cpu)
-        total = sum(b for _, b in table) + cpu.overhead_ns
+        # The frame rule: the controllers due in each cycle fit in it.
+        frame = worst_frame(design, cpu)
+        total = frame.total_ns
         if total > cpu.heartbeat_ns:
             diag = diags.add(
                 "E0600",
@@ -85,32 +60,104 @@ def check(design: Design, diags: Diagnostics) -> None:
                 f"cpu `{cpu.name}` needs {fmt_ns(total)} per cycle but its heartbeat is {fmt_ns(cpu.heartbeat_ns)}",
                 "heartbeat too short",
             )
-            rows = ", ".join(f"{n} {fmt_ns(b)}" for n, b in table)
+            rows = ", ".join(f"{n} {fmt_ns(b)}" for n, b in budget_table(design, cpu) if n in frame.controllers)
             diag.with_note(f"budgets: {rows}" + (f", overhead {fmt_ns(cpu.overhead_ns)}" if cpu.overhead_ns else ""))
+            if any(design.controllers[n].divider > 1 for n in frame.controllers):
+                diag.with_note("every controller steps in cycle 1, whatever its period: a longer period lowers the load, not the heaviest frame")
 
     for c in design.controllers.values():
-        if c.cpu is None:
+        period = c.period_ns
+        if c.cpu is None or period <= 0:
             continue
-        period = design.cpus[c.cpu].heartbeat_ns
-        if period <= 0:
-            continue
+        # Ages count base ticks (stamps are deadlines of any CPU), everything
+        # else this controller's own steps (`in_state`, its timers).
+        with_age = _compared_with_age(c)
         for span, ns in _durations(c):
-            if ns % period:
-                cycles = -(-ns // period)
-                diags.add("W0601", span, f"{fmt_ns(ns)} is not a whole number of {fmt_ns(period)} cycles", f"rounds up to {cycles} cycles").with_help(
-                    f"write `{fmt_ns(cycles * period)}` to say what happens"
+            unit, steps = period, "cycles" if c.divider == 1 else "steps"
+            if (span.start, span.end) in with_age:
+                unit, steps = design.base_tick_ns or period, "base ticks"
+            if ns % unit:
+                cycles = -(-ns // unit)
+                diags.add("W0601", span, f"{fmt_ns(ns)} is not a whole number of {fmt_ns(unit)} {steps}", f"rounds up to {cycles} {steps}").with_help(
+                    f"write `{fmt_ns(cycles * unit)}` to say what happens"
                 )
 
     _check_harmonic(design, diags)
+    design.crossings = crossings(design)
+
+
+def _check_periods(design: Design, diags: Diagnostics) -> None:
+    """Each placed controller's divider and period: `period D` over its CPU's heartbeat."""
+    for c in design.controllers.values():
+        if c.cpu is None:
+            continue
+        hb = design.cpus[c.cpu].heartbeat_ns
+        c.divider, c.period_ns = 1, max(hb, 0)
+        if not c.declared_period_ns or hb <= 0:
+            continue
+        if c.declared_period_ns % hb:
+            span = c.period_span or c.name_span
+            diag = diags.add(
+                "E0607",
+                span,
+                f"the period of `{c.name}` ({fmt_ns(c.declared_period_ns)}) is not a whole number of `{c.cpu}` cycles ({fmt_ns(hb)})",
+                "not a multiple of the heartbeat",
+            )
+            lower = c.declared_period_ns // hb * hb
+            options = [fmt_ns(x) for x in (lower, lower + hb) if x > 0]
+            diag.with_help("write " + " or ".join(f"`period {x}`" for x in options))
+            continue
+        c.divider = c.declared_period_ns // hb
+        c.period_ns = c.declared_period_ns
+
+
+def crossings(design: Design) -> list[m.Crossing]:
+    """The buffers that travel between CPUs, in the order the model documents."""
+    ctrls = design.controllers
+    out: list[m.Crossing] = []
+    writer_cpu: dict[str, str] = {}
+    for c in ctrls.values():
+        for use in c.writes:
+            if c.cpu:
+                writer_cpu.setdefault(use.name, c.cpu)
+    for name in design.gm:
+        w = writer_cpu.get(name)
+        if w is None:
+            continue
+        readers = {c.cpu for c in ctrls.values() if c.cpu and c.cpu != w and any(u.name == name for u in c.reads)}
+        if readers:
+            out.append(m.Crossing("gm", name, w, _in_cpu_order(design, readers)))
+    for c in ctrls.values():
+        sup = ctrls.get(c.supervisor) if c.supervisor else None
+        if sup is None or not sup.cpu or not c.cpu or sup.cpu == c.cpu:
+            continue
+        out.append(m.Crossing("cmd", c.name, sup.cpu, [c.cpu]))
+        out.append(m.Crossing("status", c.name, c.cpu, [sup.cpu]))
+    return out
+
+
+def _in_cpu_order(design: Design, names: set[str]) -> list[str]:
+    return [n for n in design.cpus if n in names]
+
+
+def _is_age(e: m.Expr) -> bool:
+    return isinstance(e, m.Age) or (isinstance(e, m.SubView) and e.attr == "age")
+
+
+def _compared_with_age(c: m.Controller) -> set[tuple[int, int]]:
+    """Spans of the duration constants that a comparison puts against an age."""
+    out = set()
+    for e in m.controller_exprs(c):
+        for x in m.walk_expr(e):
+            if isinstance(x, m.Binary) and x.op in ("<", "<=", ">", ">=", "==", "!="):
+                sides = (x.left, x.right)
+                if any(_is_age(y) for side in sides for y in m.walk_expr(side)):
+                    out.update((y.span.start, y.span.end) for side in sides for y in m.walk_expr(side) if isinstance(y, m.Const))
+    return out
 
 
 def _durations(c: m.Controller):
-    exprs = []
-    for stmts in [c.pre, c.post] + [r.jobs for p in c.plans.values() for r in p.rules]:
-        for s in m.walk_stmts(stmts):
-            exprs.extend(m.stmt_exprs(s))
-    for p in c.plans.values():
-        exprs.extend(r.guard for r in p.rules if r.guard is not None)
+    exprs = m.controller_exprs(c)
     seen = set()
     for e in exprs:
         for x in m.walk_expr(e):
@@ -122,6 +169,11 @@ def _durations(c: m.Controller):
 
 
 def _check_harmonic(design: Design, diags: Diagnostics) -> None:
+    """Every pair of heartbeats is harmonic: CPUs that exchange data first, then the rest.
+
+    All CPUs share one time base whose tick is the shortest heartbeat, so even
+    CPUs that exchange nothing must be harmonic for scenarios to address them.
+    """
     pairs: set[tuple[str, str]] = set()
     ctrls = design.controllers
     for c in ctrls.values():
@@ -148,3 +200,18 @@ def _check_harmonic(design: Design, diags: Diagnostics) -> None:
             cpu = design.cpus[b]
             diag = diags.add("E0602", cpu.heartbeat_span or cpu.name_span, f"cpus `{a}` and `{b}` exchange data but their periods are not harmonic", "not a multiple")
             diag.with_note(f"{fmt_ns(pa)} and {fmt_ns(pb)}: one must be a whole multiple of the other")
+    cpus = [c for c in design.cpus.values() if c.heartbeat_ns > 0]
+    reported = {name for pair in pairs for name in pair if _non_harmonic(design, *pair)}
+    for i, cb in enumerate(cpus):
+        if cb.name in reported:
+            continue
+        for ca in cpus[:i]:
+            if ca.name not in reported and _non_harmonic(design, ca.name, cb.name):
+                diag = diags.add("E0602", cb.heartbeat_span or cb.name_span, f"the heartbeats of cpus `{ca.name}` and `{cb.name}` are not harmonic", "not a multiple")
+                diag.with_note(f"{fmt_ns(ca.heartbeat_ns)} and {fmt_ns(cb.heartbeat_ns)}: one must be a whole multiple of the other (all CPUs share one time base)")
+                break
+
+
+def _non_harmonic(design: Design, a: str, b: str) -> bool:
+    lo, hi = sorted((design.cpus[a].heartbeat_ns, design.cpus[b].heartbeat_ns))
+    return lo > 0 and hi % lo != 0
