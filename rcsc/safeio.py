@@ -10,8 +10,11 @@ the commands goes through this module:
   a device or /dev/zero is refused at once) and at most `MAX_INPUT` bytes.
 * `write_file` replaces one output file atomically: the data go to a fresh
   temporary file beside it (exclusive creation, a random name), which is
-  then renamed over the target, so the target is never half written and a
-  symbolic link at the target is replaced, never written through.
+  then renamed over the target, so the target is never half written.  A
+  target that is not a regular file (`-o /dev/null`, a FIFO, a link the user
+  made) is written through instead, as a shell redirection would; where
+  rcsc chooses the name itself (`rcsc doc`'s index.html) a link or special
+  file is refused.
 * `write_tree` writes a whole output folder (a build) as one transaction:
   every new file is first written into a private folder `.rcsc-txn` inside
   the output folder, a commit marker is written, and only then are the files
@@ -89,17 +92,28 @@ def is_regular_file(path: str) -> bool:
 def write_file(path: str, data: bytes, may_replace: Callable[[str], bool] | None = None) -> None:
     """Write `data` to `path` atomically (temporary file beside it, then rename).
 
-    `may_replace(path)` is asked when `path` exists as a regular file; an
-    existing symbolic link or special file is refused unless `may_replace` is
-    None (then the link itself is replaced, its target is never touched).
+    `may_replace(path)` is asked when `path` exists as a regular file, and an
+    existing link or special file is then refused.  Without `may_replace` (a
+    report the user named on the command line) a link, device or FIFO is
+    written through like a shell redirection, and a regular file is
+    replaced atomically.
     """
     directory = os.path.dirname(path) or "."
-    if may_replace is not None and os.path.lexists(path):
+    if os.path.lexists(path):
         st = os.lstat(path)
-        if not stat.S_ISREG(st.st_mode):
-            raise FileExistsError(f"refusing to replace `{path}`: it is not a regular file")
-        if not may_replace(path):
-            raise FileExistsError(f"refusing to replace `{path}`: it was not written by rcsc")
+        if may_replace is not None:
+            if not stat.S_ISREG(st.st_mode):
+                raise FileExistsError(f"refusing to replace `{path}`: it is not a regular file")
+            if not may_replace(path):
+                raise FileExistsError(f"refusing to replace `{path}`: it was not written by rcsc")
+        elif not stat.S_ISREG(st.st_mode):
+            # A path the user named that is not a plain file (`-o /dev/null`,
+            # `-o /dev/stdout`, a FIFO, a link they made) is written through,
+            # as a shell redirection would: renaming a file over it would
+            # replace the device or the link itself.
+            with open(path, "wb") as out:
+                out.write(data)
+            return
     fd, tmp = tempfile.mkstemp(prefix=".rcsc-", suffix=".tmp", dir=directory)
     try:
         with os.fdopen(fd, "wb") as out:

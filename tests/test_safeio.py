@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import signal
+import stat
 import subprocess
 import sys
 import time
@@ -102,14 +103,29 @@ def test_doc_does_not_follow_a_dangling_link(tmp_path: Path, capsys) -> None:
     assert not outside.exists()
 
 
-def test_a_report_replaces_a_link_instead_of_writing_through_it(tmp_path: Path) -> None:
-    target = tmp_path / "target.svg"
-    target.write_text("keep\n")
+def test_a_report_to_a_device_or_link_writes_through_it(tmp_path: Path) -> None:
+    """`-o /dev/null` must leave /dev/null a device: renaming a file over it
+    would break the machine for every other program."""
+    before = os.stat(os.devnull)
+    assert main(["graph", str(SUBMARINE), "--format", "dot", "-o", os.devnull]) == 0
+    after = os.lstat(os.devnull)
+    assert stat.S_ISCHR(after.st_mode) and after.st_rdev == before.st_rdev
+    fifo = tmp_path / "pipe.dot"
+    os.mkfifo(fifo)
+    reader = subprocess.Popen(["cat", str(fifo)], stdout=subprocess.PIPE)
+    assert main(["graph", str(SUBMARINE), "-o", str(fifo)]) == 0
+    assert reader.communicate(timeout=30)[0].startswith(b"//")
+    assert stat.S_ISFIFO(os.lstat(fifo).st_mode)
+    target = tmp_path / "target.dot"
+    target.write_text("old\n")
     link = tmp_path / "graph.dot"
     os.symlink(target, link)
     assert main(["graph", str(SUBMARINE), "-o", str(link)]) == 0
-    assert target.read_text() == "keep\n"
-    assert not link.is_symlink() and link.read_text().startswith("//")
+    assert link.is_symlink() and target.read_text().startswith("//")
+    plain = tmp_path / "plain.dot"
+    plain.write_text("old\n")
+    assert main(["graph", str(SUBMARINE), "-o", str(plain)]) == 0
+    assert plain.read_text().startswith("//") and sorted(p.name for p in tmp_path.iterdir()) == ["graph.dot", "pipe.dot", "plain.dot", "target.dot"]
 
 
 class _Interrupt(BaseException):
