@@ -56,6 +56,8 @@ def _examples() -> list[tuple[Path, Path]]:
     # Every numeric type and conversion, records everywhere, target-language
     # keywords as names, names long enough to force line breaks.
     pairs.append((ROOT / "tests/stress/stress.rcs", ROOT / "tests/stress/stress.scn"))
+    # Names that the naming schemes must keep apart (tests/test_naming.py).
+    pairs.append((ROOT / "tests/naming/rcs_runtime.rcs", ROOT / "tests/naming/scenarios.scn"))
     return pairs
 
 

@@ -19,7 +19,8 @@ or a parameter of the same name into a pattern.  So, as in C
 * fields, enum variants, extern methods and parameters keep the design's name
   unless the language or the scope takes it: then a trailing `_` (`type_`),
   and a name that is not plain gets the wrapped form with a leading `_`
-  (`_0_0` for `_`); a parameter named like a design-wide value is wrapped too.
+  (`_0_0` for `_`); a parameter named like a design-wide value is wrapped and gets
+  a trailing `_` too (`_0K_`).
 
 Every name a fragment could meet is reserved (keywords, primitive types such
 as `u64` and `str`, the prelude, the runtime's and the Main Program's own
@@ -167,7 +168,8 @@ class RustNames:
         return self._escape(ctrl, nm.Reserved(RUST_KEYWORDS | {"buf", "ext", "io"}))
 
     def param(self, name: str) -> str:
-        """A parameter of a function: wrapped when a design-wide value or a keyword has its name."""
+        """A parameter of a function: wrapped, between `_`s, when it is not plain or a design-wide
+        value or a keyword has its name (a design-wide value may itself be `_` and a wrapped name)."""
         if not nm.is_plain(name) or name in self._param_reserved:
-            return nm.shorten("_" + nm.wrap(name), IDENT_LIMIT)
+            return nm.shorten("_" + nm.wrap(name) + "_", IDENT_LIMIT)
         return nm.shorten(name, IDENT_LIMIT)
