@@ -100,7 +100,7 @@ def designs(draw):
     """A design's names: top-level names are one namespace; the rest are per scope."""
     top = _distinct(draw, 8)
     return {
-        "design": draw(NAMES), "types": top[0:2], "consts": top[2:4], "fns": top[4:5], "ctrls": top[5:7], "cpus": top[7:8],
+        "design": draw(NAMES), "design_is_ctrl": draw(st.booleans()), "types": top[0:2], "consts": top[2:4], "fns": top[4:5], "ctrls": top[5:7], "cpus": top[7:8],
         "members": _distinct(draw, 3), "verbs": _distinct(draw, 3), "statuses": _distinct(draw, 2),
         "states": _distinct(draw, 3), "labels": _distinct(draw, 3), "fields": _distinct(draw, 4),
     }
@@ -191,7 +191,8 @@ def test_the_collisions_of_issue_13_are_gone() -> None:
 @given(designs())
 def test_rust_names_never_meet(d: dict) -> None:
     top = d["types"] + d["consts"] + d["fns"] + d["ctrls"] + d["cpus"]
-    n = RustNames(d["design"], top, d["ctrls"], d["cpus"])
+    design = d["ctrls"][0] if d["design_is_ctrl"] else d["design"]
+    n = RustNames(design, top, d["ctrls"], d["cpus"])
     # `types` and `functions` are imported with `*` into every module: one scope for
     # types and one for values, and the Main Program's own items beside them.
     types = [n.global_(t) for t in d["types"] + d["ctrls"]]
@@ -217,6 +218,7 @@ def test_rust_names_never_meet(d: dict) -> None:
     assoc = [n.state(s) for s in ["", "new", "done", "error", *d["states"]]] + [n.rule(v, x) for v in d["verbs"] for x in d["labels"]]
     assoc += [n.plan_fn(v) for v in d["verbs"]] + ["BUDGET_NS", "new", "step", "default"]
     assert len(set(assoc)) == len(assoc)
+    assert n.crate not in set(types) | set(values) | set(main_items) | RESERVED.names, n.crate
     modules = [n.module(c) for c in d["ctrls"]] + ["num", "types", "functions", "externs_impl"]
     assert len({x.casefold() for x in modules}) == len(modules)
 
@@ -349,3 +351,45 @@ def test_hostile_design_in_rust_equals_the_simulator_and_is_lint_clean(seed: int
     files = sorted(str(p) for p in crate.rglob("*.rs") if "target" not in p.parts)
     fmt = subprocess.run(["rustfmt", "--check", "--edition", "2021", *files], capture_output=True, text=True)
     assert fmt.returncode == 0, fmt.stdout[-3000:]
+
+
+NAMED_LIKE_ITS_CONTROLLER = """design TOP
+
+enum _ { _, u64 }
+gm _x: _ = _._
+gm go: bool = false from env
+
+controller TOP level 1 budget 1 ms {
+    verb TOP
+    reads go, _x
+    writes _x
+    status str: _ = _._
+    post { str = _x; }
+    plan TOP {
+        _: go | new -> _ | _x = _.u64;
+        x_: otherwise | _ -> done;
+        y: otherwise | new -> error(1);
+    }
+}
+
+cpu __ {
+    heartbeat 10 ms
+    schedule TOP
+}
+"""
+
+
+def test_a_design_named_like_its_controller_with_underscore_names(tmp_path: Path) -> None:
+    """The crate's name meets the glob-imported controller and `_` is a type, a member, a
+    state and a rule, `__` a CPU; C and Rust run it as `rcsc sim` does."""
+    design, scn = tmp_path / "top.rcs", tmp_path / "top.scn"
+    design.write_text(NAMED_LIKE_ITS_CONTROLLER, encoding="utf-8")
+    scn.write_text("cycles 4\nat 1: go = true\nat 1: TOP.TOP()\n", encoding="utf-8")
+    expected = reference_trace(design, scn)
+    builds = Builds(tmp_path)
+    for exe in (builds.c_binary(design, "gcc-O0"), builds.rust_binary(design, "debug")):
+        trace = tmp_path / "trace.jsonl"
+        proc = run_main(exe, scn, trace)
+        assert proc.returncode == 0, proc.stderr
+        assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())
+    assert '"state":"done","rule":"x_"' in expected.decode().splitlines()[-1]

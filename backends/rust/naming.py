@@ -19,8 +19,8 @@ or a parameter of the same name into a pattern.  So, as in C
 * fields, enum variants, extern methods and parameters keep the design's name
   unless the language or the scope takes it: then a trailing `_` (`type_`),
   and a name that is not plain gets the wrapped form with a leading `_`
-  (`_0_0` for `_`); a parameter named like a design-wide value is wrapped and gets
-  a trailing `_` too (`_0K_`).
+  (`_0_0` for `_`); a parameter named like a design-wide value or that is
+  not plain becomes `p_`, its wrapped form and `_` (`p_0K_`, `p_0_0_` for `_`).
 
 Every name a fragment could meet is reserved (keywords, primitive types such
 as `u64` and `str`, the prelude, the runtime's and the Main Program's own
@@ -71,8 +71,12 @@ class RustNames:
     """The names of one design's Rust crate."""
 
     def __init__(self, design: str, top_level: list[str] = (), controllers: list[str] = (), cpus: list[str] = ()) -> None:  # type: ignore[assignment]
+        # The crate is named in `use` paths beside the glob-imported design names: it
+        # keeps the design's name unless that is a design-wide name too (or wrapped).
+        # `d___` (a run of three, which only a reserved fragment and a join make) is no
+        # other name.
         crate = self.frag(design)
-        self.crate = nm.shorten("d__" + crate if crate[0].isdigit() else crate, 40)
+        self.crate = nm.shorten("d___" + crate if crate[0].isdigit() or design in top_level else crate, 40)
         # Parameters must not meet a design-wide value (a constant would make them a pattern).
         self._param_reserved = nm.Reserved(RUST_KEYWORDS | set(top_level) | FIXED)
         self._member_reserved = nm.Reserved(RUST_KEYWORDS | {"_"})
@@ -168,8 +172,10 @@ class RustNames:
         return self._escape(ctrl, nm.Reserved(RUST_KEYWORDS | {"buf", "ext", "io"}))
 
     def param(self, name: str) -> str:
-        """A parameter of a function: wrapped, between `_`s, when it is not plain or a design-wide
-        value or a keyword has its name (a design-wide value may itself be `_` and a wrapped name)."""
+        """A parameter of a function: `p_`, its wrapped form and `_` when it is not plain or a
+        design-wide value or a keyword has its name.  No other name has that shape (a plain
+        name does not end with `_`, no reserved name starts with `p_`, a joined name has `__`),
+        and it has a letter (clippy rejects a binding of only underscores and digits)."""
         if not nm.is_plain(name) or name in self._param_reserved:
-            return nm.shorten("_" + nm.wrap(name) + "_", IDENT_LIMIT)
+            return nm.shorten("p_" + nm.wrap(name) + "_", IDENT_LIMIT)
         return nm.shorten(name, IDENT_LIMIT)
