@@ -192,7 +192,7 @@ def test_the_collisions_of_issue_13_are_gone() -> None:
 def test_rust_names_never_meet(d: dict) -> None:
     top = d["types"] + d["consts"] + d["fns"] + d["ctrls"] + d["cpus"]
     design = d["ctrls"][0] if d["design_is_ctrl"] else d["design"]
-    n = RustNames(design, top, d["ctrls"], d["cpus"])
+    n = RustNames(design, top, d["ctrls"], d["cpus"], d["consts"] + d["fns"])
     # `types` and `functions` are imported with `*` into every module: one scope for
     # types and one for values, and the Main Program's own items beside them.
     types = [n.global_(t) for t in d["types"] + d["ctrls"]]

@@ -20,7 +20,8 @@ or a parameter of the same name into a pattern.  So, as in C
   unless the language or the scope takes it: then a trailing `_` (`type_`),
   and a name that is not plain gets the wrapped form with a leading `_`
   (`_0_0` for `_`); a parameter named like a design-wide value or that is
-  not plain becomes `p_`, its wrapped form and `_` (`p_0K_`, `p_0_0_` for `_`).
+  not plain becomes `p_`, its wrapped form and `_` (`p_0K_`, `p_0_0_` for `_`);
+  a keyword gets a trailing `_`.
 
 Every name a fragment could meet is reserved (keywords, primitive types such
 as `u64` and `str`, the prelude, the runtime's and the Main Program's own
@@ -55,6 +56,8 @@ FIXED = frozenset(
     # parameters and locals of generated functions
     "state verb cycle ext buf head sent ty from_env params names number gm ctrl value c f i r s v x".split()
 )
+# The values a parameter of a pure or extern function could meet: `types::*` and the prelude.
+PARAM_FIXED = frozenset("sub_done sub_error sub_executing sub_status Some None Ok Err".split())
 # Fixed words inside joined names.
 TAGS = frozenset("VERB STATUS PERIOD_NS cmd status args fields STATES RULES of value".split())
 RESERVED = nm.Reserved(RUST_KEYWORDS | PRIMITIVES | PRELUDE | FIXED | TAGS, [r"cse_\d+\Z"])
@@ -70,15 +73,17 @@ def _start(ident: str) -> str:
 class RustNames:
     """The names of one design's Rust crate."""
 
-    def __init__(self, design: str, top_level: list[str] = (), controllers: list[str] = (), cpus: list[str] = ()) -> None:  # type: ignore[assignment]
+    def __init__(self, design: str, top_level: list[str] = (), controllers: list[str] = (), cpus: list[str] = (),  # type: ignore[assignment]
+                 values: list[str] = ()) -> None:  # type: ignore[assignment]
+        """`top_level`: every design-wide name; `values`: the constants and functions among them."""
         # The crate is named in `use` paths beside the glob-imported design names: it
         # keeps the design's name unless that is a design-wide name too (or wrapped).
         # `d___` (a run of three, which only a reserved fragment and a join make) is no
         # other name.
         crate = self.frag(design)
         self.crate = nm.shorten("d___" + crate if crate[0].isdigit() or design in top_level else crate, 40)
-        # Parameters must not meet a design-wide value (a constant would make them a pattern).
-        self._param_reserved = nm.Reserved(RUST_KEYWORDS | set(top_level) | FIXED)
+        # Parameters must not meet a value in scope (a constant would make them a pattern).
+        self._param_reserved = nm.Reserved(set(values) | PARAM_FIXED)
         self._member_reserved = nm.Reserved(RUST_KEYWORDS | {"_"})
         stems = {("ctrl", c): "ctrl_" + self.frag(c) for c in controllers}
         stems.update({("cpu", c): self.frag(c) for c in cpus})
@@ -172,10 +177,13 @@ class RustNames:
         return self._escape(ctrl, nm.Reserved(RUST_KEYWORDS | {"buf", "ext", "io"}))
 
     def param(self, name: str) -> str:
-        """A parameter of a function: `p_`, its wrapped form and `_` when it is not plain or a
-        design-wide value or a keyword has its name.  No other name has that shape (a plain
-        name does not end with `_`, no reserved name starts with `p_`, a joined name has `__`),
-        and it has a letter (clippy rejects a binding of only underscores and digits)."""
+        """A parameter of a function: a keyword gets a trailing `_`; `p_`, the wrapped form and
+        `_` when it is not plain or a value in scope has its name.  No other name has that shape
+        (a plain name does not end with `_`, no reserved name starts with `p_`, a joined name
+        has `__`; `kw_` is a value's name only when the value is named `kw`, which is then
+        wrapped), and it has a letter (clippy rejects a binding of only underscores and digits)."""
         if not nm.is_plain(name) or name in self._param_reserved:
             return nm.shorten("p_" + nm.wrap(name) + "_", IDENT_LIMIT)
+        if name in RUST_KEYWORDS:
+            return nm.shorten(name + "_", IDENT_LIMIT)
         return nm.shorten(name, IDENT_LIMIT)

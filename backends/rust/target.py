@@ -81,7 +81,7 @@ class RustTarget(Target):
     def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
         super().__init__(design, options)
         top_level = [*design.consts, *design.enums, *design.records, *design.functions, *design.controllers, *design.gm, *design.cpus]
-        self.n = RustNames(design.name, top_level, list(design.controllers), list(design.cpus))
+        self.n = RustNames(design.name, top_level, list(design.controllers), list(design.cpus), [*design.consts, *design.functions])
         self.crate = self.n.crate
         self.infos = {name: lower_controller(c) for name, c in design.controllers.items()}
         # Context of the code being emitted.
