@@ -295,6 +295,7 @@ class RustBackend(RustTarget):
             "states": [{"name": self.state_const(s), "number": i} for i, s in enumerate(info.states)],
             "rules": [{"name": self.rule_const(plan.verb, r.label), "number": info.rule_number[(plan.verb, r.index)]} for plan in c.plans.values() for r in plan.rules],
             "plans": plans, "new_command": new_command, "decide": decide, "write": write,
+            "read": [x for s in subs for x in assign(f"self.send.{s['member']}", "=", Atom("false"), 2)],
             "pre": pre, "post": post,
             "step_head": fn_head(1, "pub ", "step", params, None),
             "imports": self.imports(self.uses),

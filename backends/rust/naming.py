@@ -25,8 +25,8 @@ or a parameter of the same name into a pattern.  So, as in C
 
 Every name a fragment could meet is reserved (keywords, primitive types such
 as `u64` and `str`, the prelude, the runtime's and the Main Program's own
-names, the locals of generated functions).  Identifiers are cut at 100
-characters and file names at 120; file names that differ only in case get a
+names, the locals of generated functions).  Identifiers and file names are
+cut at 63 characters; file names that differ only in case get a
 hash.
 """
 
@@ -61,8 +61,10 @@ PARAM_FIXED = frozenset("sub_done sub_error sub_executing sub_status Some None O
 # Fixed words inside joined names.
 TAGS = frozenset("VERB STATUS PERIOD_NS cmd status args fields STATES RULES of value".split())
 RESERVED = nm.Reserved(RUST_KEYWORDS | PRIMITIVES | PRELUDE | FIXED | TAGS, [r"cse_\d+\Z"])
-IDENT_LIMIT = 100
-FILE_LIMIT = 120
+# Short enough that a template line holding a name and a type stays within rustfmt's
+# 100 columns; a module is also a file name.
+IDENT_LIMIT = 63
+FILE_LIMIT = 63
 
 
 def _start(ident: str) -> str:

@@ -13,7 +13,7 @@ import re
 
 from rcsc import model as m
 from rcsc.backend import ordered_types
-from rcsc.backends.rust.fmt import Array, Atom, Call, Cast, Node, Struct, Unary, arm, assign, fn_head, pad, tail
+from rcsc.backends.rust.fmt import Array, Atom, Call, Cast, Node, Struct, Unary, arm, assign, field_decl, fn_head, pad, tail
 from rcsc.backends.rust.target import RustTarget, rust_string
 from rcsc.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type
 
@@ -192,14 +192,16 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
             ("echo", Atom("s.head.echo_serial")),
             ("status", Atom("s.head.status")),
             ("verb", Atom("index(s.head.verb)")),
-            ("state", Atom(f"name(&{tg.n.ctrl_part(c.name, 'STATES')}, s.head.state)")),
-            ("rule", Atom(f"name(&{tg.n.ctrl_part(c.name, 'RULES')}, s.head.rule)")),
+            ("state", Call("name", [Unary("&", Atom(tg.n.ctrl_part(c.name, "STATES"))), Atom("s.head.state")])),
+            ("rule", Call("name", [Unary("&", Atom(tg.n.ctrl_part(c.name, "RULES"))), Atom("s.head.rule")])),
             ("error_code", Atom("s.head.error_code")),
             ("fields", Call("Vec::from", [Array(fields)]) if fields else Atom("Vec::new()")),
         ])
         views.append(fn_head(0, "", tg.n.status_view(c.name), [f"s: &{tg.n.ctrl_part(c.name, 'status')}"], "StatusView") + tail(view, 1) + ["}"])
 
     members = [{"name": _member(tg, c), "type": tg.tname(c.name), "module": tg.module(c)} for c in ctrls]
+    for mb in members:
+        mb["decl"] = field_decl(f"{mb['name']}: {mb['type']}", 1)
     ext_type = "ExternsImpl" if any(f.extern for f in d.functions.values()) else "NoExterns"
     uses_ext = any(tg.step_uses_ext.get(c.name) for c in ctrls)
     ext_init = "ExternsImpl::default()" if ext_type == "ExternsImpl" else "NoExterns"
