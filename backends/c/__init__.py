@@ -78,7 +78,7 @@ class CBackend(CTarget):
     # ---- the design header -------------------------------------------------------------
 
     def design_header(self, ctrls: list[m.Controller]) -> dict:
-        d, p = self.design, self.p
+        d = self.design
         types = []
         for t in ordered_types(d):
             if isinstance(t, EnumType):
