@@ -50,7 +50,7 @@ CFLAGS = ["-O2", "-std=c99", "-ffp-contract=off"]
 DEBUG = ["-gdwarf-4"]
 GOAL = 1.0
 
-VARIANTS = [("generated", "submarine_PR_step"), ("hand-written", "hand_pr_step")]
+VARIANTS = [("generated", "submarine_PR__step"), ("hand-written", "hand_pr_step")]
 
 
 def generate(out: Path, target: str = "c") -> None:

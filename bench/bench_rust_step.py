@@ -26,7 +26,7 @@ controller running its AHEAD plan.  The script
    the first step that differs and exits 1 - the proof that both compute the
    same thing;
 5. runs each under `valgrind --tool=callgrind --toggle-collect=<step>`
-   (`submarine_PR_step`, as bench_c_step.py, and `submarine::ctrl_PR::PR::step`;
+   (`submarine_PR__step`, as bench_c_step.py, and `submarine::ctrl_PR::PR::step`;
    the drivers call them through never-inlined wrappers, bench_c_pr_step and
    bench_rust_pr_step, which are the fallback target) and divides the
    collected instruction count (Ir) by the number of steps.
@@ -54,7 +54,7 @@ RSRC = HERE / "rust_ahead"
 DESIGN = ROOT / "examples" / "submarine" / "submarine.rcs"
 GOAL = 1.1
 
-C_STEP = ("submarine_PR_step", "bench_c_pr_step")
+C_STEP = ("submarine_PR__step", "bench_c_pr_step")
 RUST_STEP = ("submarine::ctrl_PR::PR::step", "bench_rust_pr_step")
 
 CARGO_TOML = """\

@@ -72,6 +72,8 @@ def _examples() -> list[tuple[Path, Path]]:
     pairs.append((ROOT / "tests/edge/edge.rcs", ROOT / "tests/edge/edge.scn"))
     # Nothing optional: no Global Memory, types, constants or functions.
     pairs.append((ROOT / "tests/bare/bare.rcs", ROOT / "tests/bare/bare.scn"))
+    # Names that the naming schemes must keep apart (tests/test_naming.py).
+    pairs.append((ROOT / "tests/naming/rcs_runtime.rcs", ROOT / "tests/naming/scenarios.scn"))
     return pairs
 
 

@@ -28,8 +28,9 @@ CELL = ROOT / "examples/machining_cell/machining_cell.rcs"
 STRESS = ROOT / "tests/stress/stress.rcs"
 EDGE = ROOT / "tests/edge/edge.rcs"
 BARE = ROOT / "tests/bare/bare.rcs"
+HOSTILE_NAMES = ROOT / "tests/naming/rcs_runtime.rcs"
 PAIRS = CONFORMANCE
-CRATES = [SUBMARINE, CELL, STRESS, EDGE, BARE]
+CRATES = [SUBMARINE, CELL, STRESS, EDGE, BARE, HOSTILE_NAMES]
 
 
 
@@ -237,10 +238,10 @@ def test_controller_works_in_the_buffers_with_the_shared_rule_layout(tmp_path: P
     for copy in ("self.cmd", "self.status", "self.sub", "self.gm", "self.out", "self.idle"):
         assert copy not in pr, copy
     ahead = pr[pr.index("fn plan_AHEAD("):pr.index("fn plan_ASTERN(")]
-    assert "let state = buf.PR_status.head.state;" in ahead
+    assert "let state = buf.PR__status.head.state;" in ahead
     # E2..E4 share `state == S1` and `TB.done`, tested once, and their speed_status(...) call.
     assert ahead.count("if state == Self::S_S1 {") == 1
-    assert ahead.count("sub_done(&buf.TB_status.head, self.sent.TB)") == 2  # the S1 group and E5
+    assert ahead.count("sub_done(&buf.TB__status.head, self.sent.TB)") == 2  # the S1 group and E5
     code = "\n".join(ln for ln in ahead.splitlines() if not ln.lstrip().startswith("//"))
     assert code.count("speed_status(") == 1 and "let cse_1 = speed_status(" in code
     assert [ln.strip() for ln in ahead.splitlines() if "cse_1 ==" in ln] == [
@@ -248,12 +249,12 @@ def test_controller_works_in_the_buffers_with_the_shared_rule_layout(tmp_path: P
     # No EXEC store that the rule overwrites (E9 ends in error, E3 reports AT_GOAL).
     for label, stores_exec in (("E0", True), ("E9", False), ("E3", False), ("E5", True)):
         rule = ahead[ahead.index(f"// {label} "):]
-        rule = rule[:rule.index("Self::RULE_AHEAD_")]
-        assert ("buf.PR_status.head.status = num::EXEC;" in rule) == stores_exec, label
-    assert "buf.TB_cmd.head.verb = TB_VERB_AHEAD;" in ahead and "buf.TB_cmd.args.AHEAD.rpm = self.loc.prop_rpm;" in ahead
+        rule = rule[:rule.index("Self::RULE_AHEAD__")]
+        assert ("buf.PR__status.head.status = num::EXEC;" in rule) == stores_exec, label
+    assert "buf.TB__cmd.head.verb = TB__VERB__AHEAD;" in ahead and "buf.TB__cmd.args.AHEAD.rpm = self.loc.prop_rpm;" in ahead
     assert ahead.count("self.plan = 0;") == 1  # E9, the only rule that ends the plan
     step = pr[pr.index("pub fn step("):]
-    assert "buf.TB_cmd.head.serial = self.sent.TB;" in step and "buf.PR_status = " not in step and "buf.TB_cmd = " not in step
+    assert "buf.TB__cmd.head.serial = self.sent.TB;" in step and "buf.PR__status = " not in step and "buf.TB__cmd = " not in step
     assert "match self.plan {" in step and "_ => {}" in step
 
 
@@ -331,7 +332,7 @@ def test_rule_layouts_build_clean_and_conform(builds: Builds, tmp_path: Path) ->
     scn.write_text(LAYOUTS_SCENARIO, encoding="utf-8")
     crate = builds.source(design, "rust")
     top = (crate / "src/ctrl_TOP.rs").read_text(encoding="utf-8")
-    assert top.count("let cse_1 = twice(buf.TOP_status.f.count);") == 2
+    assert top.count("let cse_1 = twice(buf.TOP__status.f.count);") == 2
     # The plan's last rule has no `return;` (clippy::needless_return); clippy below also
     # rejects code after a rule that always fires (unreachable code).
     for fn in ("plan_RUN", "plan_SPIN"):

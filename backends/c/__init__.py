@@ -23,7 +23,7 @@ from rcsc.backend import (
     schedule_of,
 )
 from rcsc.backends.c.tables import main_tables
-from rcsc.backends.c.target import CTarget, _strip_parens
+from rcsc.backends.c.target import CTarget, _strip_parens, c_comment, c_string
 from rcsc.simulate import zero_value
 from rcsc.types import I32, EnumType, RecordType
 
@@ -35,38 +35,51 @@ class CBackend(CTarget):
     entry_files = ("Makefile", "CMakeLists.txt")
 
     def files(self) -> list[OutFile]:
-        d, p = self.design, self.p
+        d, n = self.design, self.n
         ctrls = built_controllers(d, self.options)
         files = [OutFile(name, self.runtime_file(name)) for name in RUNTIME_FILES]
-        files.append(OutFile(f"{p}.h", self.render("design.h.j2", **self.design_header(ctrls))))
-        files.append(OutFile(f"{p}.c", self.render("design.c.j2", **self.design_source(ctrls))))
+        common = self.common_names()
+        files.append(OutFile(f"{n.p}.h", self.render("design.h.j2", **common, **self.design_header(ctrls))))
+        files.append(OutFile(f"{n.p}.c", self.render("design.c.j2", **common, **self.design_source(ctrls))))
         externs = [f for f in d.functions.values() if f.extern]
-        files.append(OutFile(f"{p}_externs.h", self.render("externs.h.j2", p=p, protos=[self.prototype(f) + ";" for f in externs])))
+        files.append(OutFile(f"{n.p}_externs.h", self.render("externs.h.j2", **common, protos=[self.prototype(f) + ";" for f in externs])))
         if externs:
-            files.append(OutFile(f"{p}_externs.c", self.render("externs_stub.c.j2", p=p, fns=[self.extern_stub(f) for f in externs]), user=True))
+            files.append(OutFile(f"{n.p}_externs.c", self.render("externs_stub.c.j2", **common, fns=[self.extern_stub(f) for f in externs]), user=True))
         for c in ctrls:
             ctx = self.controller(c)
-            files.append(OutFile(f"{p}_{c.name}.h", self.render("ctrl.h.j2", **ctx)))
-            files.append(OutFile(f"{p}_{c.name}.c", self.render("ctrl.c.j2", **ctx)))
+            files.append(OutFile(f"{n.ctrl_stem(c.name)}.h", self.render("ctrl.h.j2", **common, **ctx)))
+            files.append(OutFile(f"{n.ctrl_stem(c.name)}.c", self.render("ctrl.c.j2", **common, **ctx)))
         deploy = self.options.exclude_simulators
         if deploy:
-            files.append(OutFile(f"{p}_io.h", self.render("io.h.j2", p=p)))
-            files.append(OutFile(f"{p}_io.c", self.render("io_stub.c.j2", p=p), user=True))
+            files.append(OutFile(f"{n.p}_io.h", self.render("io.h.j2", **common)))
+            files.append(OutFile(f"{n.p}_io.c", self.render("io_stub.c.j2", **common), user=True))
         binaries = []
         for cpu in d.cpus.values():
             tables = main_tables(self, cpu, schedule_of(d, cpu, self.options), ctrls)
-            files.append(OutFile(f"main_{cpu.name}.c", self.render("main.c.j2", p=p, cpu=cpu.name, deploy=deploy, ctrls=[c.name for c in ctrls], **tables)))
-            binaries.append({"name": f"{p}_{cpu.name}", "main": f"main_{cpu.name}.c"})
-        sources = [f"{p}.c"] + [f"{p}_{c.name}.c" for c in ctrls] + ([f"{p}_externs.c"] if externs else []) + ([f"{p}_io.c"] if deploy else []) + ["rcs_runtime.c"]
-        build = {"p": p, "sources": sources, "binaries": binaries}
+            main = f"{n.main_stem(cpu.name)}.c"
+            files.append(OutFile(main, self.render("main.c.j2", **common, cpu=cpu.name, main_file=main, cpu_string=c_string(cpu.name), deploy=deploy,
+                                                   ctrl_headers=[f"{n.ctrl_stem(c.name)}.h" for c in ctrls], **tables)))
+            binaries.append({"name": n.binary(cpu.name), "main": main})
+        sources = [f"{n.p}.c"] + [f"{n.ctrl_stem(c.name)}.c" for c in ctrls] + ([f"{n.p}_externs.c"] if externs else []) + ([f"{n.p}_io.c"] if deploy else []) + ["rcs_runtime.c"]
+        build = {"p": n.p, "lib": f"{n.p}__controllers", "sources": sources, "binaries": binaries}
         files.append(OutFile("Makefile", self.render("Makefile.j2", **build)))
         files.append(OutFile("CMakeLists.txt", self.render("CMakeLists.txt.j2", **build)))
         return files
 
+    def common_names(self) -> dict:
+        """The design-wide names every file of the design uses."""
+        n = self.n
+        return {
+            "p": n.p, "design": c_comment(self.design.name), "design_string": c_string(self.design.name),
+            "gm_type": n.fixed("gm"), "buffers_type": n.fixed("buffers"), "buffers_init": n.fixed("buffers_init"),
+            "io_read": n.fixed("io_read"), "io_write": n.fixed("io_write"),
+            "guard": n.fixed("H"), "externs_guard": n.fixed("externs", "H"), "io_guard": n.fixed("io", "H"),
+        }
+
     # ---- the design header -------------------------------------------------------------
 
     def design_header(self, ctrls: list[m.Controller]) -> dict:
-        d, p = self.design, self.p
+        d = self.design
         types = []
         for t in ordered_types(d):
             if isinstance(t, EnumType):
@@ -74,28 +87,28 @@ class CBackend(CTarget):
             else:
                 assert isinstance(t, RecordType)
                 types.append({"kind": "record", "name": self.ctype(t), "fields": [f"{self.ctype(ft)} {self.ident(n)};" for n, ft in t.fields]})
-        consts = [{"name": f"{p}_{k.name}", "value": self.literal(k.value, k.type), "where": self.where_text(k.span)} for k in d.consts.values()]
+        n = self.n
+        consts = [{"name": n.const(k.name), "value": self.literal(k.value, k.type), "where": self.where_text(k.span)} for k in d.consts.values()]
         gm = [f"{self.ctype(v.type)} {self.ident(v.name)};" for v in d.gm.values()]
         buffers = []
         for c in ctrls:
             info = self.infos[c.name]
             verbs = []
             for i, (vname, v) in enumerate(c.verbs.items(), 1):
-                verbs.append({"macro": f"{p}_{c.name}_VERB_{vname}", "number": i, "member": self.ident(vname),
-                              "args_type": f"{p}_{c.name}_{vname}_args",
+                verbs.append({"macro": n.verb(c.name, vname), "number": i, "member": self.ident(vname),
+                              "args_type": n.verb_args(c.name, vname),
                               "params": [f"{self.ctype(q.type)} {self.ident(q.name)};" for q in v.params]})
             buffers.append({
-                "name": c.name, "member": self.ident(c.name),
+                "name": c_comment(c.name), "cmd_member": n.buffer_member(c.name, "cmd"), "status_member": n.buffer_member(c.name, "status"),
                 "verbs": verbs, "with_args": [v for v in verbs if v["params"]],
-                "statuses": [{"macro": f"{p}_{c.name}_STATUS_{s}", "number": n} for s, n in c.statuses.items()],
-                "cmd_type": f"{p}_{c.name}_cmd", "status_type": f"{p}_{c.name}_status", "args_type": f"{p}_{c.name}_args",
-                "fields_type": f"{p}_{c.name}_fields",
+                "statuses": [{"macro": n.status(c.name, s), "number": k} for s, k in c.statuses.items()],
+                "cmd_type": n.ctrl_part(c.name, "cmd"), "status_type": n.ctrl_part(c.name, "status"), "args_type": n.ctrl_part(c.name, "args"),
+                "fields_type": n.ctrl_part(c.name, "fields"),
                 "fields": [f"{self.ctype(v.type)} {self.ident(v.name)};" for v in c.status_fields.values()],
                 "n_rules": len(info.rules),
             })
         fns = [f for f in d.functions.values() if not f.extern]
         return {
-            "p": p, "design": d.name,
             "periods": [{"macro": self.period_macro(c.name), "ns": c.heartbeat_ns} for c in d.cpus.values()],
             "types": types, "consts": consts, "gm": gm, "buffers": buffers,
             "protos": [f"static inline {self.prototype(f)};" for f in fns],
@@ -104,7 +117,7 @@ class CBackend(CTarget):
 
     def prototype(self, f: m.Function) -> str:
         params = ", ".join(f"{self.ctype(q.type)} {self.ident(q.name)}" for q in f.params) or "void"
-        return f"{self.ctype(f.ret)} {self.p}_{f.name}({params})"
+        return f"{self.ctype(f.ret)} {self.n.function(f.name)}({params})"
 
     def function(self, f: m.Function) -> dict:
         assert f.body is not None
@@ -125,12 +138,12 @@ class CBackend(CTarget):
         gm = [f"b->gm.{self.ident(n)} = {self.init_value(v)};" for n, v in d.gm.items()]
         inits = []
         for c in ctrls:
-            member = self.ident(c.name)
-            lines = [f"b->{member}_cmd.head.serial = 0u;", f"b->{member}_cmd.head.verb = 0;"]
-            lines += [f"b->{member}_status.head.{k} = {v};" for k, v in _HEAD_INIT]
-            lines += [f"b->{member}_status.f.{self.ident(n)} = {self.init_value(v)};" for n, v in c.status_fields.items()]
+            cmd, status = self.n.buffer_member(c.name, "cmd"), self.n.buffer_member(c.name, "status")
+            lines = [f"b->{cmd}.head.serial = 0u;", f"b->{cmd}.head.verb = 0;"]
+            lines += [f"b->{status}.head.{k} = {v};" for k, v in _HEAD_INIT]
+            lines += [f"b->{status}.f.{self.ident(n)} = {self.init_value(v)};" for n, v in c.status_fields.items()]
             inits.append(lines)
-        return {"p": self.p, "gm": gm, "ctrls": inits}
+        return {"gm": gm, "ctrls": inits}
 
     def init_value(self, v: m.Var) -> str:
         return self.literal(initial_value(v), v.type)
@@ -138,25 +151,27 @@ class CBackend(CTarget):
     # ---- one controller -----------------------------------------------------------------
 
     def controller(self, c: m.Controller) -> dict:
-        p = self.p
+        n = self.n
         info = self.infos[c.name]
         self.info, self.verb = info, None
-        member = self.ident(c.name)
-        subs = [self.ident(s) for s in info.subs]
+        subs = [{"member": self.ident(s), "cmd": n.buffer_member(s, "cmd")} for s in info.subs]
         locals_ = [f"{self.ctype(v.type)} {self.ident(v.name)};" for v in c.locals.values()]
         init = [f"self->loc.{self.ident(n)} = {self.init_value(v)};" for n, v in c.locals.items()]
         for s in subs:
-            init += [f"self->sent.{s} = 0u;", f"self->send.{s} = false;"]
+            init += [f"self->sent.{s['member']} = 0u;", f"self->send.{s['member']} = false;"]
         plans = [self.plan(c, plan) for plan in c.plans.values()]
         self.verb = None
         ctx = {
-            "p": p, "name": c.name, "type": self.ctrl_type(c.name), "member": member,
-            "own": f"buf->{member}_status", "cmd": f"buf->{member}_cmd",
+            "name": c_comment(c.name), "stem": n.ctrl_stem(c.name), "type": self.ctrl_type(c.name),
+            "init_fn": n.ctrl_part(c.name, "init"), "step_fn": n.ctrl_part(c.name, "step"),
+            "ctrl_guard": n.ctrl_part(c.name, "H"), "budget_macro": n.ctrl_part(c.name, "BUDGET_NS"),
+            "state_enum": n.ctrl_part(c.name, "state"), "rule_enum": n.ctrl_part(c.name, "rule"),
+            "own": f"buf->{n.buffer_member(c.name, 'status')}", "cmd": f"buf->{n.buffer_member(c.name, 'cmd')}",
             "kind": "simulator" if c.simulator else "controller", "level": c.level, "where": self.where_text(c.span),
             "budget_ns": c.budget_ns,
             "subs": subs, "locals": locals_, "init": init,
-            "states": [{"name": _state_enum(s), "number": i} for i, s in enumerate(info.states)],
-            "rules": [{"name": f"RULE_{plan.verb}_{r.label}", "number": info.rule_number[(plan.verb, r.index)]} for plan in c.plans.values() for r in plan.rules],
+            "states": [{"name": n.state(s), "number": i} for i, s in enumerate(info.states)],
+            "rules": [{"name": n.rule(plan.verb, r.label), "number": info.rule_number[(plan.verb, r.index)]} for plan in c.plans.values() for r in plan.rules],
             "plans": plans,
             "pre": self.stmts(c.pre, 1), "post": self.stmts(c.post, 1),
         }
@@ -167,8 +182,9 @@ class CBackend(CTarget):
         self.verb = plan.verb
         layout = plan_layout(plan, self.impure)
         return {
-            "fn": f"{c.name}_plan_{plan.verb}",
-            "verb": plan.verb,
+            "fn": self.n.plan_fn(plan.verb),
+            "verb": c_comment(plan.verb),
+            "verb_macro": self.n.verb(c.name, plan.verb),
             "where": self.where_text(plan.span),
             "continuous": plan.continuous,
             "needs_state": tests_state(layout),
@@ -193,7 +209,7 @@ class CBackend(CTarget):
 
     def cond_part(self, part) -> str:
         if isinstance(part, StateTest):
-            return "state == ST_NEW" if part.kind == "new" else f"state == {_state_enum(part.name or '')}"
+            return f"state == {self.n.state('new' if part.kind == 'new' else part.name or '')}"
         return self.expr(part)
 
     def rule(self, conj: list, r: m.Rule) -> list[str]:
@@ -206,12 +222,12 @@ class CBackend(CTarget):
         saved, self.cse = self.cse, {}  # jobs run after the condition: no stale values
         reports = any(isinstance(s, m.Report) for s in r.jobs)
         body = [] if r.next.kind in ("done", "error") or reports else [f"{own}.head.status = RCS_EXEC;"]
-        body.append(f"{own}.head.rule = RULE_{plan_verb}_{r.label};")
+        body.append(f"{own}.head.rule = {self.n.rule(plan_verb or '', r.label)};")
         body += self.stmts(r.jobs, 0)
         self.cse = saved
         nxt = r.next
         if nxt.kind == "named":
-            target = _state_enum(nxt.name or "")
+            target = self.n.state(nxt.name or "")
             enter = [f"{own}.head.state = {target};", "self->entry_cycle = cycle;"]
             if r.state.kind == "named" and r.state.name == nxt.name:
                 pass  # a self-loop keeps the time in state running
@@ -240,7 +256,3 @@ _HEAD_INIT = [
     ("error_code", "0"),
     ("stamp", "0u"),
 ]
-
-def _state_enum(name: str) -> str:
-    """File-local enumerator of a state: fixed states ST_*, named states S_<name>."""
-    return {"": "ST_NONE", "new": "ST_NEW", "done": "ST_DONE", "error": "ST_ERROR"}.get(name, f"S_{name}")

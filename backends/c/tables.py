@@ -17,76 +17,82 @@ from rcsc.backends.c.target import CTarget, c_string
 _BUILTIN = {"bool": "rcs_type_bool", "i32": "rcs_type_i32", "i64": "rcs_type_i64", "u32": "rcs_type_u32", "f64": "rcs_type_f64"}
 
 
-def type_ref(t: Type) -> str:
+def type_ref(tg: CTarget, t: Type) -> str:
     """The address of a type's descriptor."""
     if t == BOOL or isinstance(t, (IntType, FloatType)):
         return "&" + _BUILTIN[t.name]
     if t == DURATION:
         return "&rcs_type_duration"
-    return f"&type_{t.name}"
+    return "&" + tg.n.local("type", t.name)
 
 
 def _fields(tg: CTarget, struct: str, items: list[tuple[str, Type]]) -> list[str]:
-    return [f"{{{c_string(n)}, offsetof({struct}, {tg.ident(n)}), {type_ref(t)}}}," for n, t in items]
+    return [f"{{{c_string(n)}, offsetof({struct}, {tg.ident(n)}), {type_ref(tg, t)}}}," for n, t in items]
 
 
 def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: list[m.Controller]) -> dict:
-    d, p = tg.design, tg.p
+    d, n = tg.design, tg.n
     types = []
     for t in ordered_types(d):
+        desc = n.local("type", t.name)
         if isinstance(t, EnumType):
+            members = n.local("members", t.name)
             types.append({
-                "arrays": [f"static const char *const members_{t.name}[] = {{{', '.join(c_string(x) for x in t.members)}}};"],
-                "decl": f"static const rcs_type type_{t.name} = {{RCS_T_ENUM, {c_string(t.name)}, members_{t.name}, {len(t.members)}u, NULL, 0u}};",
+                "arrays": [f"static const char *const {members}[] = {{{', '.join(c_string(x) for x in t.members)}}};"],
+                "decl": f"static const rcs_type {desc} = {{RCS_T_ENUM, {c_string(t.name)}, {members}, {len(t.members)}u, NULL, 0u}};",
             })
         else:
             assert isinstance(t, RecordType)
             rows = _fields(tg, tg.ctype(t), list(t.fields))
+            fields = n.local("fields", t.name)
             # A record without fields has no field table (C has no empty array).
             types.append({
-                "arrays": [f"static const rcs_field fields_{t.name}[] = {{"] + ["    " + r for r in rows] + ["};"] if rows else [],
-                "decl": f"static const rcs_type type_{t.name} = {{RCS_T_RECORD, {c_string(t.name)}, NULL, 0u, {f'fields_{t.name}' if rows else 'NULL'}, {len(t.fields)}u}};",
+                "arrays": [f"static const rcs_field {fields}[] = {{"] + ["    " + r for r in rows] + ["};"] if rows else [],
+                "decl": f"static const rcs_type {desc} = {{RCS_T_RECORD, {c_string(t.name)}, NULL, 0u, {fields if rows else 'NULL'}, {len(t.fields)}u}};",
             })
-    type_list = [f"&type_{t.name}," for t in ordered_types(d)]
+    type_list = [f"&{n.local('type', t.name)}," for t in ordered_types(d)]
 
     consts = []
     for k in d.consts.values():
+        name = n.local("const", k.name)
         consts.append({
-            "decl": f"static const {tg.ctype(k.type)} const_{k.name} = {tg.literal(k.value, k.type, braces=True)};",
-            "row": f"{{{c_string(k.name)}, {type_ref(k.type)}, &const_{k.name}}},",
+            "decl": f"static const {tg.ctype(k.type)} {name} = {tg.literal(k.value, k.type, braces=True)};",
+            "row": f"{{{c_string(k.name)}, {type_ref(tg, k.type)}, &{name}}},",
         })
 
-    gm_rows = _fields(tg, f"{p}_gm", [(n, v.type) for n, v in d.gm.items()])
+    gm_rows = _fields(tg, n.fixed("gm"), [(x, v.type) for x, v in d.gm.items()])
     gm_env = ", ".join("1u" if v.from_env else "0u" for v in d.gm.values())
 
     index = {c.name: i for i, c in enumerate(ctrls)}
     ctrl_tables = []
     for c in ctrls:
         info = tg.infos[c.name]
-        member = tg.ident(c.name)
+        cmd, status = n.buffer_member(c.name, "cmd"), n.buffer_member(c.name, "status")
+        verbs, status_fields = n.local("verbs", c.name), n.local("status_fields", c.name)
+        states, rules, statuses = n.local("states", c.name), n.local("rules", c.name), n.local("statuses", c.name)
         arrays: list[str] = []
         verb_rows = []
         for vname, v in c.verbs.items():
             if v.params:
-                args_type = f"{p}_{c.name}_{vname}_args"
-                arrays.append(f"static const rcs_field params_{c.name}_{vname}[] = {{")
-                arrays += ["    " + r for r in _fields(tg, args_type, [(q.name, q.type) for q in v.params])]
+                params = n.local("params", c.name, vname)
+                arrays.append(f"static const rcs_field {params}[] = {{")
+                arrays += ["    " + r for r in _fields(tg, n.verb_args(c.name, vname), [(q.name, q.type) for q in v.params])]
                 arrays.append("};")
-                verb_rows.append(f"{{{c_string(vname)}, params_{c.name}_{vname}, {len(v.params)}u}},")
+                verb_rows.append(f"{{{c_string(vname)}, {params}, {len(v.params)}u}},")
             else:
                 verb_rows.append(f"{{{c_string(vname)}, NULL, 0u}},")
         if verb_rows:
-            arrays.append(f"static const rcs_verb verbs_{c.name}[] = {{")
+            arrays.append(f"static const rcs_verb {verbs}[] = {{")
             arrays += ["    " + r for r in verb_rows]
             arrays.append("};")
         if c.status_fields:
-            arrays.append(f"static const rcs_field status_fields_{c.name}[] = {{")
-            arrays += ["    " + r for r in _fields(tg, f"{p}_{c.name}_fields", [(n, v.type) for n, v in c.status_fields.items()])]
+            arrays.append(f"static const rcs_field {status_fields}[] = {{")
+            arrays += ["    " + r for r in _fields(tg, n.ctrl_part(c.name, "fields"), [(x, v.type) for x, v in c.status_fields.items()])]
             arrays.append("};")
-        arrays.append(f"static const char *const states_{c.name}[] = {{{', '.join(c_string(s) for s in info.states)}}};")
-        arrays.append(f"static const char *const rules_{c.name}[] = {{{', '.join(c_string(r) for r in info.rules)}}};")
+        arrays.append(f"static const char *const {states}[] = {{{', '.join(c_string(s) for s in info.states)}}};")
+        arrays.append(f"static const char *const {rules}[] = {{{', '.join(c_string(r) for r in info.rules)}}};")
         if c.statuses:
-            arrays.append(f"static const rcs_status_name statuses_{c.name}[] = {{{', '.join(f'{{{c_string(s)}, {n}}}' for s, n in c.statuses.items())}}};")
+            arrays.append(f"static const rcs_status_name {statuses}[] = {{{', '.join(f'{{{c_string(s)}, {k}}}' for s, k in c.statuses.items())}}};")
         top = d.supervisor_of(c.name) is None
         has_args = any(v.params for v in c.verbs.values())
         row = [
@@ -94,25 +100,26 @@ def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: li
             "1" if top else "0",
             "1" if c.simulator else "0",
             f"INT64_C({c.budget_ns})",
-            f"step_{c.name}",
-            f"&buf.{member}_cmd.head",
-            f"&buf.{member}_cmd.args" if has_args else "NULL",
-            f"sizeof buf.{member}_cmd.args" if has_args else "0u",
-            f"verbs_{c.name}" if verb_rows else "NULL",
+            n.local("step", c.name),
+            f"&buf.{cmd}.head",
+            f"&buf.{cmd}.args" if has_args else "NULL",
+            f"sizeof buf.{cmd}.args" if has_args else "0u",
+            verbs if verb_rows else "NULL",
             f"{len(verb_rows)}u",
-            f"&buf.{member}_status.head",
-            f"&buf.{member}_status.f" if c.status_fields else "NULL",
-            f"status_fields_{c.name}" if c.status_fields else "NULL",
+            f"&buf.{status}.head",
+            f"&buf.{status}.f" if c.status_fields else "NULL",
+            status_fields if c.status_fields else "NULL",
             f"{len(c.status_fields)}u",
-            f"states_{c.name}",
+            states,
             f"{len(info.states)}u",
-            f"rules_{c.name}",
+            rules,
             f"{len(info.rules)}u",
-            f"statuses_{c.name}" if c.statuses else "NULL",
+            statuses if c.statuses else "NULL",
             f"{len(c.statuses)}u",
         ]
         ctrl_tables.append({
-            "name": c.name, "member": member, "type": tg.ctrl_type(c.name), "arrays": arrays,
+            "type": tg.ctrl_type(c.name), "instance": n.local("ctrl", c.name), "step": n.local("step", c.name),
+            "init_fn": n.ctrl_part(c.name, "init"), "step_fn": n.ctrl_part(c.name, "step"), "arrays": arrays,
             "row": "{" + ", ".join(row) + "},",
         })
     return {

@@ -1,11 +1,7 @@
 """The C target: type table, expressions and statements (`<node>_expr`, `<node>_stmt`).
 
-Naming in the generated C (docs/backends.md): every design-wide identifier
-carries the design name as a prefix (`submarine_ShipDir`, `submarine_PR_step`)
-so that two designs link into one program and nothing clashes with libc;
-struct members keep the design's names (a C keyword gets a trailing `_`).
-Inside a controller's .c, states and rules are file-local enumerators
-(`ST_S1`, `RULE_AHEAD_E0`).
+Every name in the generated C comes from `naming.CNames` (`self.n`), one
+method per kind of name, so that no two things of the design get one name.
 
 Numbers follow DESIGN.md section 3 without undefined behaviour: integer
 arithmetic goes through the helpers of rcs_num.h (wrapping in the unsigned
@@ -18,14 +14,9 @@ import math
 import re
 
 from rcsc import model as m
+from rcsc.backends.c.naming import CNames
 from rcsc.backend import BuildOptions, CtrlInfo, Target, expr_key, impure_functions, lower_controller
 from rcsc.types import BOOL, DURATION, I32, I64, U32, EnumType, FloatType, IntType, RecordType, Type
-
-C_KEYWORDS = frozenset(
-    "auto break case char const continue default do double else enum extern float for goto if inline int long "
-    "register restrict return short signed sizeof static struct switch typedef union unsigned void volatile while "
-    "_Bool _Complex _Imaginary bool true false self cycle buf state main".split()
-)
 
 # Suffix of the rcs_num.h helper for each integer type.
 INT_SUFFIX = {"i32": "i32", "i64": "i64", "u32": "u32", "duration": "i64"}
@@ -59,7 +50,8 @@ class CTarget(Target):
 
     def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
         super().__init__(design, options)
-        self.p = self.ident(design.name)
+        self.n = CNames(design.name, list(design.controllers), list(design.cpus))
+        self.p = self.n.p
         # Context of the code being emitted: the controller and the verb whose plan it is.
         self.info: CtrlInfo | None = None
         self.verb: str | None = None
@@ -70,9 +62,9 @@ class CTarget(Target):
 
     # ---- names and types ---------------------------------------------------------
 
-    @staticmethod
-    def ident(name: str) -> str:
-        return name + "_" if name in C_KEYWORDS else name
+    def ident(self, name: str) -> str:
+        """A struct member or parameter named by the design."""
+        return self.n.member(name)
 
     def ctype(self, t: Type) -> str:
         if t == BOOL:
@@ -84,17 +76,17 @@ class CTarget(Target):
         if isinstance(t, FloatType):
             return "double"
         if isinstance(t, (EnumType, RecordType)):
-            return f"{self.p}_{t.name}"
+            return self.n.type(t.name)
         raise ValueError(f"no C type for {t}")
 
     def member(self, t: EnumType, name: str) -> str:
-        return f"{self.p}_{t.name}_{name}"
+        return self.n.enum_member(t.name, name)
 
     def ctrl_type(self, c: str) -> str:
-        return f"{self.p}_{c}"
+        return self.n.ctrl_type(c)
 
     def period_macro(self, cpu: str) -> str:
-        return f"{self.p}_{cpu}_PERIOD_NS"
+        return self.n.period(cpu)
 
     # ---- values --------------------------------------------------------------------
 
@@ -134,13 +126,13 @@ class CTarget(Target):
 
     def const_expr(self, e: m.Const) -> str:
         if e.name is not None and e.name in self.design.consts:
-            return f"{self.p}_{e.name}"
+            return self.n.const(e.name)
         return self.literal(e.value, e.type)
 
     def own(self) -> str:
         """The controller's own status buffer (it lives in the CPU's buffers)."""
         assert self.info is not None
-        return f"buf->{self.ident(self.info.c.name)}_status"
+        return f"buf->{self.n.buffer_member(self.info.c.name, 'status')}"
 
     def ref_expr(self, e: m.Ref) -> str:
         name = self.ident(e.name)
@@ -152,7 +144,7 @@ class CTarget(Target):
             return f"{self.own()}.f.{name}"
         if e.kind == "param":
             assert self.info is not None and self.verb is not None, "a command parameter outside a plan"
-            return f"buf->{self.ident(self.info.c.name)}_cmd.args.{self.ident(self.verb)}.{name}"
+            return f"buf->{self.n.buffer_member(self.info.c.name, 'cmd')}.args.{self.ident(self.verb)}.{name}"
         return name  # a function's parameter
 
     def instate_expr(self, e: m.InState) -> str:
@@ -162,12 +154,12 @@ class CTarget(Target):
     def subview_expr(self, e: m.SubView) -> str:
         assert self.info is not None
         sub = self.ident(e.sub)
-        status = f"buf->{sub}_status"
+        status = f"buf->{self.n.buffer_member(e.sub, 'status')}"
         head, sent = f"&{status}.head", f"self->sent.{sub}"
         if e.attr in ("done", "error", "executing"):
             return f"rcs_sub_{e.attr}({head}, {sent})"
         if e.attr == "status":
-            return f"rcs_sub_status({head}, {sent}, {self.p}_{e.sub}_STATUS_{e.value})"
+            return f"rcs_sub_status({head}, {sent}, {self.n.status(e.sub, e.value or '')})"
         if e.attr == "error_code":
             return f"{status}.head.error_code"
         if e.attr == "age":
@@ -207,7 +199,7 @@ class CTarget(Target):
         args = [self.expr(a) for a in e.args]
         if e.kind in ("fn", "extern"):
             name = self.cse.get(expr_key(e))
-            return name if name is not None else f"{self.p}_{e.func}({', '.join(args)})"
+            return name if name is not None else f"{self.n.function(e.func)}({', '.join(args)})"
         if e.kind == "record":
             return f"(({self.ctype(e.type)}){{{', '.join(args) or '0'}}})"
         if e.kind == "convert":
@@ -257,15 +249,16 @@ class CTarget(Target):
         verb = self.design.controllers[s.sub].verbs[s.verb]
         # Written in place: nothing else runs during this step, and the serial
         # that makes the command new is set at the write phase.
-        out = [f"{pad}buf->{sub}_cmd.head.verb = {self.p}_{s.sub}_VERB_{s.verb};"]
+        cmd = self.n.buffer_member(s.sub, "cmd")
+        out = [f"{pad}buf->{cmd}.head.verb = {self.n.verb(s.sub, s.verb)};"]
         for p, a in zip(verb.params, s.args):
-            out.append(f"{pad}buf->{sub}_cmd.args.{self.ident(s.verb)}.{self.ident(p.name)} = {self.expr(a)};")
+            out.append(f"{pad}buf->{cmd}.args.{self.ident(s.verb)}.{self.ident(p.name)} = {self.expr(a)};")
         out.append(f"{pad}self->send.{sub} = true;")
         return out
 
     def report_stmt(self, s: m.Report, indent: int) -> list[str]:
         assert self.info is not None
-        return ["    " * indent + f"{self.own()}.head.status = {self.p}_{self.info.c.name}_STATUS_{s.status};"]
+        return ["    " * indent + f"{self.own()}.head.status = {self.n.status(self.info.c.name, s.status)};"]
 
     def if_stmt(self, s: m.If, indent: int) -> list[str]:
         pad = "    " * indent

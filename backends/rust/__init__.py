@@ -67,16 +67,17 @@ class RustBackend(RustTarget):
         pure = [f for f in d.functions.values() if not f.extern]
         files: list[OutFile] = []
         ctrl_files = [OutFile(f"src/{self.module(c)}.rs", self.render("ctrl.rs.j2", **self.controller(c))) for c in ctrls]
-        files.append(OutFile("Cargo.toml", self.render("Cargo.toml.j2", crate=self.crate, design=d.name, cpus=[c.name for c in d.cpus.values()])))
+        files.append(OutFile("Cargo.toml", self.render("Cargo.toml.j2", crate=self.crate, design=d.name,
+                                                                  bins=[{"name": self.n.binary(c.name), "path": f"src/bin/{self.n.bin_stem(c.name)}.rs"} for c in d.cpus.values()])))
         modules = ["num", "types"] + (["functions"] if pure else []) + [self.module(c) for c in ctrls] + (["externs_impl"] if externs else [])
-        files.append(OutFile("src/lib.rs", self.render("lib.rs.j2", **self.lib(sorted(modules, key=_mod_key), externs))))
+        files.append(OutFile("src/lib.rs", self.render("lib.rs.j2", **self.lib(sorted(modules), externs))))
         files.append(OutFile("src/num.rs", self.runtime_text("num.rs")))
         files.append(OutFile("src/types.rs", self.render("types.rs.j2", **self.types_module(ctrls))))
         if pure:
             files.append(OutFile("src/functions.rs", self.render("functions.rs.j2", **self.functions_module(pure))))
         files += ctrl_files
         for cpu in d.cpus.values():
-            files.append(OutFile(f"src/bin/{cpu.name}.rs", self.render("main.rs.j2", **main_program(self, cpu, schedule_of(d, cpu, self.options), ctrls))))
+            files.append(OutFile(f"src/bin/{self.n.bin_stem(cpu.name)}.rs", self.render("main.rs.j2", **main_program(self, cpu, schedule_of(d, cpu, self.options), ctrls))))
         if externs:
             files.append(OutFile("src/externs_impl.rs", self.render("externs_impl.rs.j2", **self.externs_stub(externs)), user=True))
         if deploy:
@@ -103,7 +104,7 @@ class RustBackend(RustTarget):
         return sorted(p.name for p in folder.iterdir() if p.name.endswith(".rs"))
 
     def module(self, c: m.Controller) -> str:
-        return f"ctrl_{c.name}"
+        return self.n.module(c.name)
 
     # ---- lib.rs ----------------------------------------------------------------------------
 
@@ -166,28 +167,31 @@ class RustBackend(RustTarget):
             info = self.infos[c.name]
             verbs = []
             for i, (vname, v) in enumerate(c.verbs.items(), 1):
-                verbs.append({"const": f"{c.name}_VERB_{vname}", "number": i, "member": self.ident(vname),
-                              "args_type": f"{c.name}_{vname}_args",
+                verbs.append({"const": self.n.verb(c.name, vname), "number": i, "member": self.ident(vname),
+                              "args_type": self.n.verb_args(c.name, vname),
                               "params": [x for q in v.params for x in field_decl(f"pub {self.ident(q.name)}: {self.rtype(q.type)}", 1)]})
-            fields_type = f"{c.name}_fields"
+            fields_type = self.n.ctrl_part(c.name, "fields")
+            status_type, cmd_type = self.n.ctrl_part(c.name, "status"), self.n.ctrl_part(c.name, "cmd")
+            status_member, cmd_member = self.n.buffer_member(c.name, "status"), self.n.buffer_member(c.name, "cmd")
             status_init = [("head", Atom("StatusHead::INIT"))]
             if c.status_fields:
                 status_init.append(("f", Struct(fields_type, [(self.ident(n), self.init_value(v)) for n, v in c.status_fields.items()])))
             buffers.append({
-                "name": c.name, "member": self.ident(c.name), "where": self.where_text(c.span),
+                "name": c.name, "where": self.where_text(c.span),
                 "kind": "simulator" if c.simulator else "controller",
                 "verbs": verbs, "with_args": [v for v in verbs if v["params"]],
-                "statuses": [{"const": f"{c.name}_STATUS_{s}", "number": n} for s, n in c.statuses.items()],
-                "cmd_type": f"{c.name}_cmd", "status_type": f"{c.name}_status", "args_type": f"{c.name}_args",
+                "statuses": [{"const": self.n.status(c.name, s), "number": k} for s, k in c.statuses.items()],
+                "cmd_type": cmd_type, "status_type": status_type, "args_type": self.n.ctrl_part(c.name, "args"),
                 "fields_type": fields_type,
                 "fields": [x for n, v in c.status_fields.items() for x in field_decl(f"pub {self.ident(n)}: {self.rtype(v.type)}", 1)],
                 "arg_members": [x for v in verbs if v["params"] for x in field_decl(f"pub {v['member']}: {v['args_type']}", 1)],
-                "status_init": assign(f"pub const INIT: {c.name}_status", "=", Struct(f"{c.name}_status", status_init), 1),
+                "status_init": assign(f"pub const INIT: {status_type}", "=", Struct(status_type, status_init), 1),
                 "n_rules": len(info.rules),
-                "buffer_decls": field_decl(f"pub {c.name}_cmd: {c.name}_cmd", 1) + field_decl(f"pub {c.name}_status: {c.name}_status", 1),
+                "buffer_decls": field_decl(f"pub {cmd_member}: {cmd_type}", 1) + field_decl(f"pub {status_member}: {status_type}", 1),
             })
         buf_new = tail(Struct("Buffers", [("gm", Atom("Gm::INIT"))] + [
-            x for c in ctrls for x in ((f"{c.name}_cmd", Call("Default::default")), (f"{c.name}_status", Atom(f"{c.name}_status::INIT")))
+            x for c in ctrls for x in ((self.n.buffer_member(c.name, "cmd"), Call("Default::default")),
+                                       (self.n.buffer_member(c.name, "status"), Atom(f"{self.n.ctrl_part(c.name, 'status')}::INIT")))
         ]), 2)
         return {
             "design": d.name,
@@ -238,7 +242,7 @@ class RustBackend(RustTarget):
         self.begin()
         self.uses.update(("num", "types"))
         me = self.tname(c.name)
-        own, cmd = self.own(), f"buf.{c.name}_cmd"
+        own, cmd = self.own(), f"buf.{self.n.buffer_member(c.name, 'cmd')}"
         subs = [{"name": s, "member": self.ident(s)} for s in info.subs]
         locals_ = [x for v in c.locals.values() for x in field_decl(f"pub {self.ident(v.name)}: {self.rtype(v.type)}", 1)]
         init: list[tuple[str, object]] = []
@@ -266,7 +270,7 @@ class RustBackend(RustTarget):
         if plans:
             new_command.append(f"{pad(3)}self.plan = match verb {{")
             for p in plans:
-                new_command += arm(f"{c.name}_VERB_{p['verb']}", Atom(f"{c.name}_VERB_{p['verb']}"), 4)
+                new_command += arm(p["verb_const"], Atom(p["verb_const"]), 4)
             new_command += [f"{pad(4)}_ => {{"] + assign(f"{head}.status", "=", Atom("num::ERROR"), 5) + [f"{pad(5)}0", f"{pad(4)}}}", f"{pad(3)}}};"]
         else:
             new_command.append(f"{pad(3)}// {c.name} has no plans: every command is answered with ERROR.")
@@ -278,9 +282,9 @@ class RustBackend(RustTarget):
             sent = f"self.sent.{s['member']}"
             write += if_open(Atom(f"self.send.{s['member']}"), 2)
             write += assign(sent, "=", Call("num::next_serial", [Atom(sent)]), 3)
-            write += assign(f"buf.{s['name']}_cmd.head.serial", "=", Atom(sent), 3)
+            write += assign(f"buf.{self.n.buffer_member(s['name'], 'cmd')}.head.serial", "=", Atom(sent), 3)
             write.append(f"{pad(2)}}}")
-        calls = [(f"{c.name}_VERB_{p['verb']}", Atom(f"self.{p['fn']}({', '.join(['buf'] + (['ext'] if p['ext'] else []) + (['cycle'] if p['cycle'] else []))})"))
+        calls = [(p["verb_const"], Atom(f"self.{p['fn']}({', '.join(['buf'] + (['ext'] if p['ext'] else []) + (['cycle'] if p['cycle'] else []))})"))
                  for p in plans]
         if len(calls) == 1:  # clippy::single_match: one plan is an `if`
             decide = if_open(Bin.make("==", Atom("self.plan"), Atom(calls[0][0])), 2) + expr_stmt(calls[0][1], 3) + [f"{pad(2)}}}"]
@@ -297,6 +301,7 @@ class RustBackend(RustTarget):
             "states": [{"name": self.state_const(s), "number": i} for i, s in enumerate(info.states)],
             "rules": [{"name": self.rule_const(plan.verb, r.label), "number": info.rule_number[(plan.verb, r.index)]} for plan in c.plans.values() for r in plan.rules],
             "plans": plans, "new_command": new_command, "decide": decide, "write": write,
+            "read": [x for s in subs for x in assign(f"self.send.{s['member']}", "=", Atom("false"), 2)],
             "pre": pre, "post": post,
             "step_head": fn_head(1, "pub ", "step", params, None),
             "imports": self.imports(self.uses),
@@ -317,10 +322,11 @@ class RustBackend(RustTarget):
         self.uses = outer_uses | uses
         params = ["&mut self", "buf: &mut Buffers"] + (["ext: &impl Externs"] if "ext" in uses else []) + (["cycle: u64"] if "cycle" in uses else [])
         return {
-            "fn": f"plan_{plan.verb}",
+            "fn": self.n.plan_fn(plan.verb),
             "verb": plan.verb,
+            "verb_const": self.n.verb(c.name, plan.verb),
             "doc": f"plan {plan.verb}{' (continuous)' if plan.continuous else ''}, {self.where_text(plan.span)}: the first rule whose state and",
-            "head": fn_head(1, "", f"plan_{plan.verb}", params, None),
+            "head": fn_head(1, "", self.n.plan_fn(plan.verb), params, None),
             "body": body,
             "ext": "ext" in uses,
             "cycle": "cycle" in uses,
@@ -396,10 +402,6 @@ class RustBackend(RustTarget):
         if cond is None:
             return [comment] + body
         return [comment] + if_open(cond, indent) + body + [f"{pad(indent)}}}"]
-
-
-def _mod_key(name: str) -> tuple:
-    return (name.lower(), name)
 
 
 def _rustfmt_use_order(lines: list[str]) -> list[str]:

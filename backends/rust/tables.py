@@ -13,7 +13,7 @@ import re
 
 from rcsc import model as m
 from rcsc.backend import ordered_types
-from rcsc.backends.rust.fmt import Array, Atom, Call, Cast, Node, Struct, Unary, arm, assign, fn_head, pad, tail
+from rcsc.backends.rust.fmt import Array, Atom, Call, Cast, Node, Struct, Unary, arm, assign, field_decl, fn_head, pad, tail
 from rcsc.backends.rust.target import RustTarget, rust_string
 from rcsc.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type
 
@@ -36,7 +36,7 @@ class _Main:
     def type_ref(self, t: Type) -> Atom:
         if t == BOOL or t == DURATION or isinstance(t, (IntType, FloatType)):
             return Atom("&" + _BUILTIN[t.name], 11)
-        return Atom(f"&T_{t.name}", 11)
+        return Atom(f"&{self.tg.n.type_desc(t.name)}", 11)
 
     def field_desc(self, name: str, t: Type) -> Call:
         return Call("field_desc", [_s(name), self.type_ref(t)])
@@ -52,12 +52,12 @@ class _Main:
             return Call("Value::Enum", [Cast.make(Atom(expr), "usize")])
         if isinstance(t, RecordType):
             self.record_value(t)
-            return Call(f"{t.name}_value", [Atom(expr)])
+            return Call(self.tg.n.helper(t.name, "value"), [Atom(expr)])
         return Call(f"Value::{_VALUE[t.name]}", [Atom(expr)])
 
     def from_value(self, arg: Node, t: Type) -> Node:
         """The design's value of an `Option<&Value>` expression."""
-        name = f"{t.name}_of"
+        name = self.tg.n.helper(t.name, "of", builtin=not isinstance(t, (EnumType, RecordType)))
         if name not in self.helpers:
             self.helpers[name] = []  # reserve (records refer to themselves through fields)
             self.helpers[name] = self._from_value_fn(t)
@@ -67,9 +67,10 @@ class _Main:
         tg = self.tg
         if isinstance(t, EnumType):
             rt = tg.rtype(t)
+            of = tg.n.helper(t.name, "of")
             if len(t.members) <= 1:
-                return fn_head(0, "", f"{t.name}_of", ["_v: Option<&Value>"], rt) + tail(Atom(f"{rt}::{tg.ident(t.members[0])}"), 1) + ["}"]
-            lines = fn_head(0, "", f"{t.name}_of", ["v: Option<&Value>"], rt) + ["    match v {"]
+                return fn_head(0, "", of, ["_v: Option<&Value>"], rt) + tail(Atom(f"{rt}::{tg.ident(t.members[0])}"), 1) + ["}"]
+            lines = fn_head(0, "", of, ["v: Option<&Value>"], rt) + ["    match v {"]
             for i, x in enumerate(t.members[1:], 1):
                 lines += arm(f"Some(Value::Enum({i}))", Atom(f"{rt}::{tg.ident(x)}"), 2)
             lines += arm("_", Atom(f"{rt}::{tg.ident(t.members[0])}"), 2) + ["    }", "}"]
@@ -77,8 +78,8 @@ class _Main:
         if isinstance(t, RecordType):
             rt = tg.rtype(t)
             if not t.fields:  # a record without fields: nothing to read
-                return fn_head(0, "", f"{t.name}_of", ["_v: Option<&Value>"], rt) + tail(Struct(rt, []), 1) + ["}"]
-            lines = fn_head(0, "", f"{t.name}_of", ["v: Option<&Value>"], rt) + ["    let f: &[Value] = match v {",
+                return fn_head(0, "", tg.n.helper(t.name, "of"), ["_v: Option<&Value>"], rt) + tail(Struct(rt, []), 1) + ["}"]
+            lines = fn_head(0, "", tg.n.helper(t.name, "of"), ["v: Option<&Value>"], rt) + ["    let f: &[Value] = match v {",
                      "        Some(Value::Record(f)) => f,", "        _ => &[],", "    };"]
             fields = []
             for i, (n, ft) in enumerate(t.fields):
@@ -89,11 +90,11 @@ class _Main:
             return lines
         v = _VALUE[t.name]
         rt = tg.rtype(t)
-        return [f"fn {t.name}_of(v: Option<&Value>) -> {rt} {{", "    match v {", f"        Some(Value::{v}(x)) => *x,",
+        return [f"fn {tg.n.helper(t.name, 'of', builtin=True)}(v: Option<&Value>) -> {rt} {{", "    match v {", f"        Some(Value::{v}(x)) => *x,",
                 f"        _ => {_ZERO[t.name]},", "    }", "}"]  # short: the built-in types
 
     def record_value(self, t: RecordType) -> None:
-        name = f"{t.name}_value"
+        name = self.tg.n.helper(t.name, "value")
         if name in self.helpers:
             return
         self.helpers[name] = []
@@ -117,8 +118,8 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
         else:
             assert isinstance(t, RecordType)
             kind = Call("Kind::Record", [mp.fields(list(t.fields))])
-        statics.append(assign(f"static T_{t.name}: TypeDesc", "=", Struct("TypeDesc", [("name", _s(t.name)), ("kind", kind)]), 0))
-    types = [Atom(f"&T_{t.name}", 11) for t in ordered_types(d)]
+        statics.append(assign(f"static {tg.n.type_desc(t.name)}: TypeDesc", "=", Struct("TypeDesc", [("name", _s(t.name)), ("kind", kind)]), 0))
+    types = [Atom(f"&{tg.n.type_desc(t.name)}", 11) for t in ordered_types(d)]
     statics.append(assign(f"static TYPES: [&TypeDesc; {len(types)}]", "=", Array(types), 0))
     consts = [Call("const_desc", [_s(k.name), mp.type_ref(k.type)]) for k in d.consts.values()]
     statics.append(assign(f"static CONSTS: [ConstDesc; {len(consts)}]", "=", Array(consts), 0))
@@ -139,8 +140,8 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
             ("fields", mp.fields([(n, v.type) for n, v in c.status_fields.items()])),
             ("extra_statuses", Unary("&", Array([Atom(f"({rust_string(s)}, {n})") for s, n in c.statuses.items()]))),
         ]))
-        names.append(assign(f"static {c.name}_STATES: [&str; {len(info.states)}]", "=", Array([_s(s) for s in info.states]), 0))
-        names.append(assign(f"static {c.name}_RULES: [&str; {len(info.rules)}]", "=", Array([_s(r) for r in info.rules]), 0))
+        names.append(assign(f"static {tg.n.ctrl_part(c.name, 'STATES')}: [&str; {len(info.states)}]", "=", Array([_s(s) for s in info.states]), 0))
+        names.append(assign(f"static {tg.n.ctrl_part(c.name, 'RULES')}: [&str; {len(info.rules)}]", "=", Array([_s(r) for r in info.rules]), 0))
     statics.append(assign(f"static CTRLS: [CtrlDesc; {len(ctrl_descs)}]", "=", Array(ctrl_descs), 0))
     design = Struct("DesignDesc", [
         ("design", _s(d.name)), ("cpu", _s(cpu.name)), ("period_ns", Atom(tg.period_const(cpu.name))),
@@ -166,10 +167,10 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
     for c in ctrls:
         if not c.verbs or d.supervisor_of(c.name) is not None:
             continue  # operator commands go to the top of the hierarchy only
-        lines = [f"{pad(3)}{index[c.name]} => {{", f"{pad(4)}let c = &mut self.buf.{c.name}_cmd;",
+        lines = [f"{pad(3)}{index[c.name]} => {{", f"{pad(4)}let c = &mut self.buf.{tg.n.buffer_member(c.name, 'cmd')};",
                  f"{pad(4)}c.head.serial = num::next_serial(c.head.serial);", f"{pad(4)}match verb {{"]
         for j, (vn, v) in enumerate(c.verbs.items()):
-            sets = assign("c.head.verb", "=", Atom(f"{c.name}_VERB_{vn}"), 6)
+            sets = assign("c.head.verb", "=", Atom(tg.n.verb(c.name, vn)), 6)
             for k, q in enumerate(v.params):
                 get = "args.first()" if k == 0 else f"args.get({k})"
                 sets += assign(f"c.args.{tg.ident(vn)}.{tg.ident(q.name)}", "=", mp.from_value(Atom(get), q.type), 6)
@@ -187,20 +188,22 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
     status = []
     views = []
     for c in ctrls:
-        status += arm(str(index[c.name]), Call(f"status_{c.name}", [Unary("&", Atom(f"self.buf.{c.name}_status"))]), 3)
+        status += arm(str(index[c.name]), Call(tg.n.status_view(c.name), [Unary("&", Atom(f"self.buf.{tg.n.buffer_member(c.name, 'status')}"))]), 3)
         fields = [mp.to_value(f"s.f.{tg.ident(n)}", v.type) for n, v in c.status_fields.items()]
         view = Struct("StatusView", [
             ("echo", Atom("s.head.echo_serial")),
             ("status", Atom("s.head.status")),
             ("verb", Atom("index(s.head.verb)")),
-            ("state", Atom(f"name(&{c.name}_STATES, s.head.state)")),
-            ("rule", Atom(f"name(&{c.name}_RULES, s.head.rule)")),
+            ("state", Call("name", [Unary("&", Atom(tg.n.ctrl_part(c.name, "STATES"))), Atom("s.head.state")])),
+            ("rule", Call("name", [Unary("&", Atom(tg.n.ctrl_part(c.name, "RULES"))), Atom("s.head.rule")])),
             ("error_code", Atom("s.head.error_code")),
             ("fields", Call("Vec::from", [Array(fields)]) if fields else Atom("Vec::new()")),
         ])
-        views.append(fn_head(0, "", f"status_{c.name}", [f"s: &{c.name}_status"], "StatusView") + tail(view, 1) + ["}"])
+        views.append(fn_head(0, "", tg.n.status_view(c.name), [f"s: &{tg.n.ctrl_part(c.name, 'status')}"], "StatusView") + tail(view, 1) + ["}"])
 
     members = [{"name": _member(tg, c), "type": tg.tname(c.name), "module": tg.module(c)} for c in ctrls]
+    for mb in members:
+        mb["decl"] = field_decl(f"{mb['name']}: {mb['type']}", 1)
     ext_type = "ExternsImpl" if any(f.extern for f in d.functions.values()) else "NoExterns"
     uses_ext = any(tg.step_uses_ext.get(c.name) for c in ctrls)
     ext_init = "ExternsImpl::default()" if ext_type == "ExternsImpl" else "NoExterns"
@@ -248,5 +251,4 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
 
 def _member(tg: RustTarget, c: m.Controller) -> str:
     """The field of `Main` that holds a controller (apart from `buf`, `ext` and `io`)."""
-    name = tg.ident(c.name)
-    return name + "_" if name in ("buf", "ext", "io") else name
+    return tg.n.main_member(c.name)

@@ -4,9 +4,9 @@ Expressions are built as trees (`rcsc.backends.rust.fmt`), which lay
 themselves out as rustfmt does; `<node>_stmt` methods return the lines of a
 statement.
 
-Naming in the generated Rust: the design's names are kept (a Rust keyword,
-or a name that would clash with a generated one, gets a trailing `_`), so
-the library allows the naming lints.  Design-wide items live in `types`
+Every name in the generated Rust comes from `naming.RustNames` (`self.n`),
+one method per kind of name; the design's names are kept where they can be,
+so the library allows the naming lints.  Design-wide items live in `types`
 (types, constants, Global Memory, buffers) and `functions` (pure
 functions); a controller's states and rules are associated constants of its
 struct (`Self::S_S1`, `Self::RULE_AHEAD_E0`).
@@ -24,6 +24,7 @@ import math
 import re
 
 from rcsc import model as m
+from rcsc.backends.rust.naming import RustNames
 from rcsc.backend import BuildOptions, CtrlInfo, Target, expr_key, impure_functions, initial_value, lower_controller
 from rcsc.backends.rust.fmt import (
     P_POSTFIX,
@@ -45,26 +46,6 @@ from rcsc.backends.rust.fmt import (
     pad,
 )
 from rcsc.types import BOOL, DURATION, I64, U32, EnumType, FloatType, IntType, RecordType, Type
-
-RUST_KEYWORDS = frozenset(
-    "as break const continue crate else enum extern false fn for if impl in let loop match mod move mut pub ref "
-    "return self Self static struct super trait true type unsafe use where while async await dyn abstract become "
-    "box do final macro override priv typeof unsized virtual yield try gen union".split()
-)
-# Names the generated code defines or uses beside the design's, per namespace:
-# a design name that equals one (or matches a pattern of them) gets a trailing `_`.
-TYPE_RESERVED = frozenset(
-    "Buffers Gm StatusHead CommandHead Sent Sending Locals Externs ExternsImpl NoExterns Io Main "
-    "num core std alloc types functions host io Option Result Default Clone Copy Debug PartialEq Eq Send Sync "
-    "Sized Drop Fn FnMut FnOnce Vec String Box Value Kind TypeDesc FieldDesc VerbDesc ConstDesc GmDesc CtrlDesc "
-    "DesignDesc StatusView HostDesign".split()
-)
-_TYPE_PATTERN = re.compile(r"_(cmd|status|fields|args)$|^ctrl_")
-VALUE_RESERVED = frozenset(
-    "sub_done sub_error sub_executing sub_status state verb cycle ext buf main name index status_none "
-    "TYPES CONSTS GM CTRLS DESIGN Some None Ok Err field_desc const_desc gm_desc verb_desc".split()
-)
-_VALUE_PATTERN = re.compile(r"_VERB_|_STATUS_|_PERIOD_NS$|_STATES$|_RULES$|_of$|_value$|^T_|^status_|^cse_\d+$")
 
 INT_NAME = {"i32": "i32", "i64": "i64", "u32": "u32", "duration": "i64"}
 WRAPPING = {"+": "wrapping_add", "-": "wrapping_sub", "*": "wrapping_mul"}
@@ -108,7 +89,9 @@ class RustTarget(Target):
 
     def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
         super().__init__(design, options)
-        self.crate = design.name if design.name not in RUST_KEYWORDS | {"core", "std", "alloc", "host", "test", "proc_macro"} else design.name + "_rcs"
+        top_level = [*design.consts, *design.enums, *design.records, *design.functions, *design.controllers, *design.gm, *design.cpus]
+        self.n = RustNames(design.name, top_level, list(design.controllers), list(design.cpus), [*design.consts, *design.functions])
+        self.crate = self.n.crate
         self.infos = {name: lower_controller(c) for name, c in design.controllers.items()}
         # Context of the code being emitted.
         self.info: CtrlInfo | None = None
@@ -116,7 +99,6 @@ class RustTarget(Target):
         # What the code emitted since the last `begin()` used: "num", "types",
         # "functions", "ext", "cycle".
         self.uses: set[str] = set()
-        self._globals = set(design.consts) | set(design.enums) | set(design.records) | set(design.functions)
         # Pure calls computed once for the conditions being emitted: expr_key -> local name.
         self.cse: dict[object, str] = {}
         self.impure = impure_functions(design)
@@ -126,30 +108,20 @@ class RustTarget(Target):
 
     # ---- names and types ---------------------------------------------------------
 
-    @staticmethod
-    def ident(name: str) -> str:
-        """A design name as a Rust field, member or method name (only keywords clash)."""
-        return name + "_" if name in RUST_KEYWORDS else name
+    def ident(self, name: str) -> str:
+        """A struct field, an enum variant or an extern method named by the design."""
+        return self.n.member(name)
 
-    @staticmethod
-    def tname(name: str) -> str:
-        """A design name in the type namespace (enums, records, controllers)."""
-        if name in RUST_KEYWORDS or name in TYPE_RESERVED or _TYPE_PATTERN.search(name):
-            return name + "_"
-        return name
+    def tname(self, name: str) -> str:
+        """A design-wide type (enum, record, controller)."""
+        return self.n.global_(name)
 
-    @staticmethod
-    def vname(name: str) -> str:
-        """A design name in the value namespace (constants, functions)."""
-        if name in RUST_KEYWORDS or name in VALUE_RESERVED or _VALUE_PATTERN.search(name):
-            return name + "_"
-        return name
+    def vname(self, name: str) -> str:
+        """A design-wide value (constant, function)."""
+        return self.n.global_(name)
 
     def param(self, name: str) -> str:
-        """A function parameter: also kept apart from the design's global names (a parameter
-        named like a constant would be a constant pattern in Rust)."""
-        ident = self.vname(name)
-        return ident + "_" if ident in self._globals or ident == "ext" else ident
+        return self.n.param(name)
 
     def rtype(self, t: Type) -> str:
         if t == BOOL:
@@ -165,15 +137,13 @@ class RustTarget(Target):
         raise ValueError(f"no Rust type for {t}")
 
     def period_const(self, cpu: str) -> str:
-        return f"{cpu}_PERIOD_NS"
+        return self.n.period(cpu)
 
-    @staticmethod
-    def state_const(name: str) -> str:
-        return {"": "ST_NONE", "new": "ST_NEW", "done": "ST_DONE", "error": "ST_ERROR"}.get(name, f"S_{name}")
+    def state_const(self, name: str) -> str:
+        return self.n.state(name)
 
-    @staticmethod
-    def rule_const(verb: str, label: str) -> str:
-        return f"RULE_{verb}_{label}"
+    def rule_const(self, verb: str, label: str) -> str:
+        return self.n.rule(verb, label)
 
     # ---- values --------------------------------------------------------------------
 
@@ -222,7 +192,7 @@ class RustTarget(Target):
     def own(self) -> str:
         """The controller's own status buffer (it lives in the CPU's buffers)."""
         assert self.info is not None
-        return f"buf.{self.info.c.name}_status"
+        return f"buf.{self.n.buffer_member(self.info.c.name, 'status')}"
 
     def ref_expr(self, e: m.Ref) -> Node:
         name = self.ident(e.name)
@@ -234,7 +204,7 @@ class RustTarget(Target):
             return Atom(f"{self.own()}.f.{name}")
         if e.kind == "param":
             assert self.info is not None and self.verb is not None, "a command parameter outside a plan"
-            return Atom(f"buf.{self.info.c.name}_cmd.args.{self.ident(self.verb)}.{name}")
+            return Atom(f"buf.{self.n.buffer_member(self.info.c.name, 'cmd')}.args.{self.ident(self.verb)}.{name}")
         return Atom(self.param(e.name))  # a function's parameter
 
     def _period(self) -> str:
@@ -248,14 +218,14 @@ class RustTarget(Target):
 
     def subview_expr(self, e: m.SubView) -> Node:
         assert self.info is not None
-        status = f"buf.{e.sub}_status"
+        status = f"buf.{self.n.buffer_member(e.sub, 'status')}"
         head, sent = Unary("&", Atom(f"{status}.head")), Atom(f"self.sent.{self.ident(e.sub)}")
         if e.attr in ("done", "error", "executing"):
             self.uses.add("types")
             return Call(f"sub_{e.attr}", [head, sent])
         if e.attr == "status":
             self.uses.add("types")
-            return Call("sub_status", [head, sent, Atom(f"{e.sub}_STATUS_{e.value}")])
+            return Call("sub_status", [head, sent, Atom(self.n.status(e.sub, e.value or ""))])
         if e.attr == "error_code":
             return Atom(f"{status}.head.error_code")
         if e.attr == "age":
@@ -373,16 +343,17 @@ class RustTarget(Target):
         self.uses.add("types")
         # Written in place: nothing else runs during this step, and the serial
         # that makes the command new is set at the write phase.
-        out = assign(f"buf.{s.sub}_cmd.head.verb", "=", Atom(f"{s.sub}_VERB_{s.verb}"), indent)
+        cmd = self.n.buffer_member(s.sub, "cmd")
+        out = assign(f"buf.{cmd}.head.verb", "=", Atom(self.n.verb(s.sub, s.verb)), indent)
         for p, a in zip(verb.params, s.args):
-            out += assign(f"buf.{s.sub}_cmd.args.{self.ident(s.verb)}.{self.ident(p.name)}", "=", self.expr(a), indent)
+            out += assign(f"buf.{cmd}.args.{self.ident(s.verb)}.{self.ident(p.name)}", "=", self.expr(a), indent)
         out += assign(f"self.send.{sub}", "=", Atom("true"), indent)
         return out
 
     def report_stmt(self, s: m.Report, indent: int) -> list[str]:
         assert self.info is not None
         self.uses.add("types")
-        return assign(f"{self.own()}.head.status", "=", Atom(f"{self.info.c.name}_STATUS_{s.status}"), indent)
+        return assign(f"{self.own()}.head.status", "=", Atom(self.n.status(self.info.c.name, s.status)), indent)
 
     def if_stmt(self, s: m.If, indent: int) -> list[str]:
         out: list[str] = []

@@ -33,8 +33,8 @@
 #define RULE_E5 16
 
 /* Private state: own status out, command out to TB, world model. */
-static submarine_PR_status pr_so; /* status out (PR_STATUS of the template) */
-static submarine_TB_cmd tb_co;    /* command out to TB; tb_co.head.serial = serial last sent */
+static submarine_PR__status pr_so; /* status out (PR_STATUS of the template) */
+static submarine_TB__cmd tb_co;    /* command out to TB; tb_co.head.serial = serial last sent */
 static bool tb_new;               /* a command to TB was issued this cycle */
 static double prop_speed;         /* rpm ordered from TB */
 static double last_speed;         /* knots, previous cycle */
@@ -62,32 +62,32 @@ void hand_pr_init(void)
 /* Appendix C: PROPULSION CONTROL: AHEAD, AT DESIRED SPEED. */
 static void pr_ahead(const submarine_buffers *G)
 {
-    const submarine_TB_status *tb_si = &G->TB_status;
+    const submarine_TB__status *tb_si = &G->TB__status;
     const int32_t ship_dir = G->gm.ship_dir;
     const int32_t state = pr_so.head.state;
     const bool tb_current = tb_co.head.serial != 0u && tb_si->head.echo_serial == tb_co.head.serial;
     const bool tb_done = tb_current && tb_si->head.status == RCS_DONE;
 
-    if (state == S0 && (ship_dir == submarine_ShipDir_AHEAD || ship_dir == submarine_ShipDir_STOPPED)) {
+    if (state == S0 && (ship_dir == submarine_ShipDir__AHEAD || ship_dir == submarine_ShipDir__STOPPED)) {
         /* E0 */
         pr_so.head.status = RCS_EXEC;
         pr_so.head.rule = RULE_E0;
         pr_so.head.state = S1;
-        prop_speed = G->PR_cmd.args.AHEAD.speed * submarine_RPM_PER_KNOT;
+        prop_speed = G->PR__cmd.args.AHEAD.speed * submarine_RPM_PER_KNOT;
         if (prop_speed < 0.0) {
             prop_speed = 0.0;
         } else if (prop_speed > submarine_MAX_AHEAD_RPM) {
             prop_speed = submarine_MAX_AHEAD_RPM;
         }
-        tb_co.head.verb = submarine_TB_VERB_AHEAD;
+        tb_co.head.verb = submarine_TB__VERB__AHEAD;
         tb_co.args.AHEAD.rpm = prop_speed;
         tb_new = true;
-    } else if (state == S0 && ship_dir == submarine_ShipDir_BACK) {
+    } else if (state == S0 && ship_dir == submarine_ShipDir__BACK) {
         /* E1 */
         pr_so.head.status = RCS_EXEC;
         pr_so.head.rule = RULE_E1;
         pr_so.head.state = S2;
-        tb_co.head.verb = submarine_TB_VERB_STOP;
+        tb_co.head.verb = submarine_TB__VERB__STOP;
         tb_new = true;
     } else if ((state == S0 || state == S1 || state == S2) &&
                ((tb_current && tb_si->head.status == RCS_ERROR) || tb_si->f.tripped)) {
@@ -100,11 +100,11 @@ static void pr_ahead(const submarine_buffers *G)
     } else if (state == S1 && tb_done) {
         /* sub_speed_status (WM), then E2, E3, E4 */
         const double speed = G->gm.ship_speed;
-        const double goal = G->PR_cmd.args.AHEAD.speed;
+        const double goal = G->PR__cmd.args.AHEAD.speed;
         const double diff = speed - goal;
         if (diff <= submarine_SPEED_TOL && diff >= -submarine_SPEED_TOL) {
             /* E3: at speed */
-            pr_so.head.status = submarine_PR_STATUS_AT_GOAL;
+            pr_so.head.status = submarine_PR__STATUS__AT_GOAL;
             pr_so.head.rule = RULE_E3;
         } else if (speed < goal) {
             if (!(ship_accel > submarine_SETTLED_ACCEL)) {
@@ -115,7 +115,7 @@ static void pr_ahead(const submarine_buffers *G)
                 if (prop_speed > submarine_MAX_AHEAD_RPM) {
                     prop_speed = submarine_MAX_AHEAD_RPM;
                 }
-                tb_co.head.verb = submarine_TB_VERB_AHEAD;
+                tb_co.head.verb = submarine_TB__VERB__AHEAD;
                 tb_co.args.AHEAD.rpm = prop_speed;
                 tb_new = true;
             }
@@ -128,7 +128,7 @@ static void pr_ahead(const submarine_buffers *G)
                 if (prop_speed < 0.0) {
                     prop_speed = 0.0;
                 }
-                tb_co.head.verb = submarine_TB_VERB_AHEAD;
+                tb_co.head.verb = submarine_TB__VERB__AHEAD;
                 tb_co.args.AHEAD.rpm = prop_speed;
                 tb_new = true;
             }
@@ -138,13 +138,13 @@ static void pr_ahead(const submarine_buffers *G)
         pr_so.head.status = RCS_EXEC;
         pr_so.head.rule = RULE_E5;
         pr_so.head.state = S1;
-        prop_speed = G->PR_cmd.args.AHEAD.speed * submarine_RPM_PER_KNOT;
+        prop_speed = G->PR__cmd.args.AHEAD.speed * submarine_RPM_PER_KNOT;
         if (prop_speed < 0.0) {
             prop_speed = 0.0;
         } else if (prop_speed > submarine_MAX_AHEAD_RPM) {
             prop_speed = submarine_MAX_AHEAD_RPM;
         }
-        tb_co.head.verb = submarine_TB_VERB_AHEAD;
+        tb_co.head.verb = submarine_TB__VERB__AHEAD;
         tb_co.args.AHEAD.rpm = prop_speed;
         tb_new = true;
     } else {
@@ -162,29 +162,29 @@ void hand_pr_step(submarine_buffers *G, uint64_t cycle)
     tb_new = false;
 
     /* Check if new command. */
-    if (G->PR_cmd.head.serial != pr_so.head.echo_serial) {
-        pr_so.head.echo_serial = G->PR_cmd.head.serial;
+    if (G->PR__cmd.head.serial != pr_so.head.echo_serial) {
+        pr_so.head.echo_serial = G->PR__cmd.head.serial;
         pr_so.head.status = RCS_EXEC;
-        pr_so.head.verb = G->PR_cmd.head.verb;
+        pr_so.head.verb = G->PR__cmd.head.verb;
         pr_so.head.state = S0;
         pr_so.head.rule = 0;
         pr_so.head.error_code = 0;
-        if (pr_so.head.verb != submarine_PR_VERB_AHEAD) {
+        if (pr_so.head.verb != submarine_PR__VERB__AHEAD) {
             /* only AHEAD is written out here: any other verb is refused */
             pr_so.head.status = RCS_ERROR;
         }
     }
 
     /* Decision process: select the state table of the command. */
-    if (pr_so.head.verb == submarine_PR_VERB_AHEAD) {
+    if (pr_so.head.verb == submarine_PR__VERB__AHEAD) {
         pr_ahead(G);
     }
 
     /* Post-process: write status every cycle, the command to TB when issued. */
     pr_so.head.stamp = cycle;
-    G->PR_status = pr_so;
+    G->PR__status = pr_so;
     if (tb_new) {
         tb_co.head.serial = tb_co.head.serial == UINT32_MAX ? 1u : tb_co.head.serial + 1u;
-        G->TB_cmd = tb_co;
+        G->TB__cmd = tb_co;
     }
 }

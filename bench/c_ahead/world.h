@@ -62,9 +62,9 @@ static void world_before_step(bench_world *w, submarine_buffers *const *bufs, si
         w->ship_speed = -1.5; /* scripted: astern when the next AHEAD arrives (E1, E5) */
         w->shaft_rpm = -20.0;
     }
-    ship_dir = w->ship_speed > 0.1 ? submarine_ShipDir_AHEAD
-               : w->ship_speed < -0.1 ? submarine_ShipDir_BACK
-                                      : submarine_ShipDir_STOPPED;
+    ship_dir = w->ship_speed > 0.1 ? submarine_ShipDir__AHEAD
+               : w->ship_speed < -0.1 ? submarine_ShipDir__BACK
+                                      : submarine_ShipDir__STOPPED;
     w->new_cmd = cycle % CMD_EVERY == 1u;
     if (w->new_cmd) {
         w->pr_serial = rcs_next_serial(w->pr_serial);
@@ -73,16 +73,16 @@ static void world_before_step(bench_world *w, submarine_buffers *const *bufs, si
         bufs[i]->gm.ship_speed = w->ship_speed;
         bufs[i]->gm.ship_dir = ship_dir;
         if (w->new_cmd) {
-            bufs[i]->PR_cmd.head.serial = w->pr_serial;
-            bufs[i]->PR_cmd.head.verb = submarine_PR_VERB_AHEAD;
-            bufs[i]->PR_cmd.args.AHEAD.speed = goals[w->n_cmd % N_GOALS];
+            bufs[i]->PR__cmd.head.serial = w->pr_serial;
+            bufs[i]->PR__cmd.head.verb = submarine_PR__VERB__AHEAD;
+            bufs[i]->PR__cmd.args.AHEAD.speed = goals[w->n_cmd % N_GOALS];
         }
     }
     if (w->new_cmd) {
         w->n_cmd++;
     }
-    w->sent_before = bufs[0]->TB_cmd.head.serial;
-    w->state_before = bufs[0]->PR_status.head.state;
+    w->sent_before = bufs[0]->TB__cmd.head.serial;
+    w->state_before = bufs[0]->PR__status.head.state;
 }
 
 static void world_after_step(bench_world *w, submarine_buffers *const *bufs, size_t n, uint64_t cycle)
@@ -91,27 +91,27 @@ static void world_after_step(bench_world *w, submarine_buffers *const *bufs, siz
     /* Statistics: which rule fired (or why none did). */
     if (w->new_cmd) {
         w->counts[W_NEW]++;
-        w->counts[b->PR_status.head.rule == 10 ? W_E0 : W_E1]++;
+        w->counts[b->PR__status.head.rule == 10 ? W_E0 : W_E1]++;
     } else if (w->state_before != 4 && w->state_before != 5) {
         w->counts[W_IDLE]++;
-    } else if (b->TB_cmd.head.serial != w->sent_before) {
-        const int32_t r = b->PR_status.head.rule;
+    } else if (b->TB__cmd.head.serial != w->sent_before) {
+        const int32_t r = b->PR__status.head.rule;
         w->counts[r == 13 ? W_E2 : r == 15 ? W_E4 : W_E5]++;
-    } else if (b->PR_status.head.state == 3) {
+    } else if (b->PR__status.head.state == 3) {
         w->counts[W_E9]++;
     } else if (!(w->sent_before != 0u && w->tb_echo == w->sent_before && w->tb_status == RCS_DONE)) {
         w->counts[W_WAIT_TB]++;
-    } else if (fabs_(w->ship_speed - b->PR_cmd.args.AHEAD.speed) <= 0.25) {
+    } else if (fabs_(w->ship_speed - b->PR__cmd.args.AHEAD.speed) <= 0.25) {
         w->counts[W_E3]++;
     } else {
         w->counts[W_WAIT_CLOSING]++;
     }
 
     /* TB (scheduled after PR): take a new command, spool, report. */
-    if (b->TB_cmd.head.serial != w->tb_echo) {
-        w->tb_echo = b->TB_cmd.head.serial;
-        w->tb_verb = b->TB_cmd.head.verb;
-        w->rpm_goal = w->tb_verb == submarine_TB_VERB_AHEAD ? b->TB_cmd.args.AHEAD.rpm : 0.0;
+    if (b->TB__cmd.head.serial != w->tb_echo) {
+        w->tb_echo = b->TB__cmd.head.serial;
+        w->tb_verb = b->TB__cmd.head.verb;
+        w->rpm_goal = w->tb_verb == submarine_TB__VERB__AHEAD ? b->TB__cmd.args.AHEAD.rpm : 0.0;
         w->tb_status = RCS_EXEC;
         w->tb_error = 0;
     }
@@ -131,13 +131,13 @@ static void world_after_step(bench_world *w, submarine_buffers *const *bufs, siz
         w->tb_status = RCS_DONE;
     }
     for (size_t i = 0; i < n; i++) {
-        bufs[i]->TB_status.head.echo_serial = w->tb_echo;
-        bufs[i]->TB_status.head.status = w->tb_status;
-        bufs[i]->TB_status.head.verb = w->tb_verb;
-        bufs[i]->TB_status.head.error_code = w->tb_error;
-        bufs[i]->TB_status.head.stamp = cycle;
-        bufs[i]->TB_status.f.shaft_rpm = w->shaft_rpm;
-        bufs[i]->TB_status.f.tripped = w->tripped;
+        bufs[i]->TB__status.head.echo_serial = w->tb_echo;
+        bufs[i]->TB__status.head.status = w->tb_status;
+        bufs[i]->TB__status.head.verb = w->tb_verb;
+        bufs[i]->TB__status.head.error_code = w->tb_error;
+        bufs[i]->TB__status.head.stamp = cycle;
+        bufs[i]->TB__status.f.shaft_rpm = w->shaft_rpm;
+        bufs[i]->TB__status.f.tripped = w->tripped;
     }
 }
 

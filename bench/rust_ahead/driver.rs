@@ -103,19 +103,19 @@ fn main() {
 
         if cycle % CMD_EVERY == 1 {
             pr_serial = num::next_serial(pr_serial);
-            buf.PR_cmd.head.serial = pr_serial;
-            buf.PR_cmd.head.verb = PR_VERB_AHEAD;
-            buf.PR_cmd.args.AHEAD.speed = GOALS[n_cmd as usize % GOALS.len()];
+            buf.PR__cmd.head.serial = pr_serial;
+            buf.PR__cmd.head.verb = PR__VERB__AHEAD;
+            buf.PR__cmd.args.AHEAD.speed = GOALS[n_cmd as usize % GOALS.len()];
             n_cmd += 1;
             new_cmd = true;
         }
 
-        let sent_before = buf.TB_cmd.head.serial;
-        let state_before = buf.PR_status.head.state;
+        let sent_before = buf.TB__cmd.head.serial;
+        let state_before = buf.PR__status.head.state;
         bench_rust_pr_step(&mut pr, &mut buf, cycle);
 
         {
-            let s = &buf.PR_status.head;
+            let s = &buf.PR__status.head;
             let w: [u64; 11] = [
                 s.echo_serial as u64,
                 s.status as u32 as u64,
@@ -124,10 +124,10 @@ fn main() {
                 s.rule as u32 as u64,
                 s.error_code as u32 as u64,
                 s.stamp,
-                buf.PR_status.f.tb_fault as u32 as u64,
-                buf.TB_cmd.head.serial as u64,
-                buf.TB_cmd.head.verb as u32 as u64,
-                buf.TB_cmd.args.AHEAD.rpm.to_bits(),
+                buf.PR__status.f.tb_fault as u32 as u64,
+                buf.TB__cmd.head.serial as u64,
+                buf.TB__cmd.head.verb as u32 as u64,
+                buf.TB__cmd.args.AHEAD.rpm.to_bits(),
             ];
             for x in w {
                 digest = mix(digest, x);
@@ -143,22 +143,22 @@ fn main() {
                     s.rule,
                     s.error_code,
                     s.stamp,
-                    buf.PR_status.f.tb_fault,
-                    buf.TB_cmd.head.serial,
-                    buf.TB_cmd.head.verb,
-                    buf.TB_cmd.args.AHEAD.rpm.to_bits()
+                    buf.PR__status.f.tb_fault,
+                    buf.TB__cmd.head.serial,
+                    buf.TB__cmd.head.verb,
+                    buf.TB__cmd.args.AHEAD.rpm.to_bits()
                 );
             }
         }
 
-        let goal = buf.PR_cmd.args.AHEAD.speed;
+        let goal = buf.PR__cmd.args.AHEAD.speed;
         if new_cmd {
             counts[W_NEW] += 1;
-            counts[if buf.PR_status.head.rule == 10 { W_E0 } else { W_E1 }] += 1;
+            counts[if buf.PR__status.head.rule == 10 { W_E0 } else { W_E1 }] += 1;
         } else if state_before != 4 && state_before != 5 {
             counts[W_IDLE] += 1;
-        } else if buf.TB_cmd.head.serial != sent_before {
-            let r = buf.PR_status.head.rule;
+        } else if buf.TB__cmd.head.serial != sent_before {
+            let r = buf.PR__status.head.rule;
             counts[if r == 13 {
                 W_E2
             } else if r == 15 {
@@ -166,7 +166,7 @@ fn main() {
             } else {
                 W_E5
             }] += 1;
-        } else if buf.PR_status.head.state == 3 {
+        } else if buf.PR__status.head.state == 3 {
             counts[W_E9] += 1;
         } else if !(sent_before != 0 && tb_echo == sent_before && tb_status == num::DONE) {
             counts[W_WAIT_TB] += 1;
@@ -176,10 +176,10 @@ fn main() {
             counts[W_WAIT_CLOSING] += 1;
         }
 
-        if buf.TB_cmd.head.serial != tb_echo {
-            tb_echo = buf.TB_cmd.head.serial;
-            tb_verb = buf.TB_cmd.head.verb;
-            rpm_goal = if tb_verb == TB_VERB_AHEAD { buf.TB_cmd.args.AHEAD.rpm } else { 0.0 };
+        if buf.TB__cmd.head.serial != tb_echo {
+            tb_echo = buf.TB__cmd.head.serial;
+            tb_verb = buf.TB__cmd.head.verb;
+            rpm_goal = if tb_verb == TB__VERB__AHEAD { buf.TB__cmd.args.AHEAD.rpm } else { 0.0 };
             tb_status = num::EXEC;
             tb_error = 0;
         }
@@ -201,29 +201,29 @@ fn main() {
         if tb_status == num::EXEC && fabs_(shaft_rpm - rpm_goal) <= 1.0 {
             tb_status = num::DONE;
         }
-        buf.TB_status.head.echo_serial = tb_echo;
-        buf.TB_status.head.status = tb_status;
-        buf.TB_status.head.verb = tb_verb;
-        buf.TB_status.head.error_code = tb_error;
-        buf.TB_status.head.stamp = cycle;
-        buf.TB_status.f.shaft_rpm = shaft_rpm;
-        buf.TB_status.f.tripped = tripped;
+        buf.TB__status.head.echo_serial = tb_echo;
+        buf.TB__status.head.status = tb_status;
+        buf.TB__status.head.verb = tb_verb;
+        buf.TB__status.head.error_code = tb_error;
+        buf.TB__status.head.stamp = cycle;
+        buf.TB__status.f.shaft_rpm = shaft_rpm;
+        buf.TB__status.f.tripped = tripped;
     }
 
     println!("steps {}", steps);
     for (name, n) in WHAT_NAMES.iter().zip(counts.iter()) {
         println!("count {} {}", name, n);
     }
-    let s = &buf.PR_status.head;
+    let s = &buf.PR__status.head;
     println!(
         "final PR status: echo {} status {} verb {} state {} rule {} err {} stamp {} tb_fault {}",
-        s.echo_serial, s.status, s.verb, s.state, s.rule, s.error_code, s.stamp, buf.PR_status.f.tb_fault
+        s.echo_serial, s.status, s.verb, s.state, s.rule, s.error_code, s.stamp, buf.PR__status.f.tb_fault
     );
     println!(
         "final TB cmd: serial {} verb {} rpm {:016x}",
-        buf.TB_cmd.head.serial,
-        buf.TB_cmd.head.verb,
-        buf.TB_cmd.args.AHEAD.rpm.to_bits()
+        buf.TB__cmd.head.serial,
+        buf.TB__cmd.head.verb,
+        buf.TB__cmd.args.AHEAD.rpm.to_bits()
     );
     println!("digest {:016x}", digest);
 }

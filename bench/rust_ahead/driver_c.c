@@ -26,7 +26,7 @@ static submarine_buffers buf;
 /* The measured call: one step of the generated controller. */
 __attribute__((noinline)) void bench_c_pr_step(submarine_PR *self, submarine_buffers *b, uint64_t cycle)
 {
-    submarine_PR_step(self, b, cycle);
+    submarine_PR__step(self, b, cycle);
 }
 
 static uint64_t mix(uint64_t h, uint64_t x)
@@ -57,17 +57,17 @@ int main(int argc, char **argv)
     world_init(&w);
     memset(&buf, 0, sizeof buf);
     submarine_buffers_init(&buf);
-    submarine_PR_init(&pr);
+    submarine_PR__init(&pr);
 
     for (cycle = 1u; cycle <= steps; cycle++) {
-        const rcs_status_head *s = &buf.PR_status.head;
+        const rcs_status_head *s = &buf.PR__status.head;
         world_before_step(&w, bufs, 1u, cycle);
         bench_c_pr_step(&pr, &buf, cycle);
         {
             const uint64_t v[] = {s->echo_serial, (uint32_t)s->status, (uint32_t)s->verb, (uint32_t)s->state,
                                   (uint32_t)s->rule, (uint32_t)s->error_code, s->stamp,
-                                  (uint32_t)buf.PR_status.f.tb_fault, buf.TB_cmd.head.serial,
-                                  (uint32_t)buf.TB_cmd.head.verb, bits(buf.TB_cmd.args.AHEAD.rpm)};
+                                  (uint32_t)buf.PR__status.f.tb_fault, buf.TB__cmd.head.serial,
+                                  (uint32_t)buf.TB__cmd.head.verb, bits(buf.TB__cmd.args.AHEAD.rpm)};
             for (size_t i = 0; i < sizeof v / sizeof v[0]; i++) {
                 digest = mix(digest, v[i]);
             }
@@ -75,19 +75,19 @@ int main(int argc, char **argv)
         if (trace) {
             printf("%" PRIu64 " %" PRIu32 " %d %d %d %d %d %" PRIu64 " %d %" PRIu32 " %d %016" PRIx64 "\n", cycle,
                    s->echo_serial, (int)s->status, (int)s->verb, (int)s->state, (int)s->rule, (int)s->error_code,
-                   s->stamp, (int)buf.PR_status.f.tb_fault, buf.TB_cmd.head.serial, (int)buf.TB_cmd.head.verb,
-                   bits(buf.TB_cmd.args.AHEAD.rpm));
+                   s->stamp, (int)buf.PR__status.f.tb_fault, buf.TB__cmd.head.serial, (int)buf.TB__cmd.head.verb,
+                   bits(buf.TB__cmd.args.AHEAD.rpm));
         }
         world_after_step(&w, bufs, 1u, cycle);
     }
     world_print_counts(&w, steps);
     printf("final PR status: echo %" PRIu32 " status %d verb %d state %d rule %d err %d stamp %" PRIu64
            " tb_fault %d\n",
-           buf.PR_status.head.echo_serial, (int)buf.PR_status.head.status, (int)buf.PR_status.head.verb,
-           (int)buf.PR_status.head.state, (int)buf.PR_status.head.rule, (int)buf.PR_status.head.error_code,
-           buf.PR_status.head.stamp, (int)buf.PR_status.f.tb_fault);
-    printf("final TB cmd: serial %" PRIu32 " verb %d rpm %016" PRIx64 "\n", buf.TB_cmd.head.serial,
-           (int)buf.TB_cmd.head.verb, bits(buf.TB_cmd.args.AHEAD.rpm));
+           buf.PR__status.head.echo_serial, (int)buf.PR__status.head.status, (int)buf.PR__status.head.verb,
+           (int)buf.PR__status.head.state, (int)buf.PR__status.head.rule, (int)buf.PR__status.head.error_code,
+           buf.PR__status.head.stamp, (int)buf.PR__status.f.tb_fault);
+    printf("final TB cmd: serial %" PRIu32 " verb %d rpm %016" PRIx64 "\n", buf.TB__cmd.head.serial,
+           (int)buf.TB__cmd.head.verb, bits(buf.TB__cmd.args.AHEAD.rpm));
     printf("digest %016" PRIx64 "\n", digest);
     return 0;
 }
