@@ -47,8 +47,10 @@ class Fallback(Exception):
 _MAX_RECURSION = 48
 
 _CMP_OPS = frozenset(("==", "!=", "<=", ">=", "<", ">"))
-_ADD_OPS = frozenset(("+", "-"))
-_MUL_OPS = frozenset(("*", "/", "%"))
+# Precedence levels of the binary operators (and of the prefix `not`).
+_OR, _AND, _NOT, _CMP, _SUM, _PROD = range(1, 7)
+_LEVELS = {"or": _OR, "and": _AND, "+": _SUM, "-": _SUM, "*": _PROD, "/": _PROD, "%": _PROD}
+_LEVELS.update(dict.fromkeys(_CMP_OPS, _CMP))
 _ASSIGN_OPS = frozenset(("=", "+=", "-=", "*="))
 _UNITS = frozenset(UNIT_NANOS)
 # Words that start an expression as keywords where a full `expr` may start
@@ -110,6 +112,21 @@ class _Parser:
             self.diags.add("E0007", node.span, f"nested more than {MAX_NESTING} levels deep", "too deep here").with_help(
                 "split it: compute parts in locals, or move them into functions"
             )
+        return node
+
+    def nest1(self, node, child):
+        """`nest` for one child (no generator: this is the hot path)."""
+        depth = node.depth = getattr(child, "depth", 1) + 1
+        if depth > MAX_NESTING and not self.too_deep:
+            self.nest(node, child)
+        return node
+
+    def nest2(self, node, left, right):
+        """`nest` for two children."""
+        a, b = getattr(left, "depth", 1), getattr(right, "depth", 1)
+        depth = node.depth = (a if a > b else b) + 1
+        if depth > MAX_NESTING and not self.too_deep:
+            self.nest(node, left, right)
         return node
 
     # ---- file and top-level items ------------------------------------------------
@@ -597,67 +614,41 @@ class _Parser:
         return self.nest(ast.IfExpr(self.span(first), cond, then, else_), cond, then, else_)
 
     def or_expr(self) -> ast.Expr:
-        first = self.i
-        left = self.and_expr()
-        while self.toks[self.i] == "or":
-            self.i += 1
-            right = self.and_expr()
-            op_span = Span(self.src, left.span.end, right.span.start)
-            left = self.nest(ast.Binary(self.span(first), "or", left, right, op_span), left, right)
-        return left
+        return self.binary(_OR)
 
-    def and_expr(self) -> ast.Expr:
+    def binary(self, min_level: int) -> ast.Expr:
+        """Operators of precedence `min_level` and above, by precedence
+        climbing (one call per operand, not one per grammar level): the
+        grammar's or_expr (_OR), and_expr (_AND), not_expr (_NOT),
+        cmp_expr (_CMP), sum_expr (_SUM) and prod_expr (_PROD)."""
         first = self.i
-        left = self.not_expr()
-        while self.toks[self.i] == "and":
-            self.i += 1
-            right = self.not_expr()
-            op_span = Span(self.src, left.span.end, right.span.start)
-            left = self.nest(ast.Binary(self.span(first), "and", left, right, op_span), left, right)
-        return left
-
-    def not_expr(self) -> ast.Expr:
-        if self.toks[self.i] != "not":
-            return self.cmp_expr()
-        first = self.i
-        self.enter()
-        self.i += 1
-        operand = self.not_expr()
-        self.recursion -= 1
-        return self.nest(ast.Unary(self.span(first), "not", operand), operand)
-
-    def cmp_expr(self) -> ast.Expr:
-        first = self.i
-        left = self.sum_expr()
-        op = self.toks[self.i]
-        if op not in _CMP_OPS:
-            return left
-        op_i = self.i
-        self.i += 1
-        right = self.sum_expr()
-        return self.nest(ast.Binary(self.span(first), op, left, right, self.tspan(op_i)), left, right)
-
-    def sum_expr(self) -> ast.Expr:
-        first = self.i
-        left = self.prod_expr()
         toks = self.toks
-        while toks[self.i] in _ADD_OPS:
-            op_i = self.i
+        if min_level <= _NOT and toks[first] == "not":
+            self.enter()
             self.i += 1
-            right = self.prod_expr()
-            left = self.nest(ast.Binary(self.span(first), toks[op_i], left, right, self.tspan(op_i)), left, right)
-        return left
-
-    def prod_expr(self) -> ast.Expr:
-        first = self.i
-        left = self.unary()
-        toks = self.toks
-        while toks[self.i] in _MUL_OPS:
+            operand = self.binary(_NOT)
+            self.recursion -= 1
+            left = self.nest1(ast.Unary(self.span(first), "not", operand), operand)
+        else:
+            left = self.unary()
+        while True:
             op_i = self.i
-            self.i += 1
-            right = self.unary()
-            left = self.nest(ast.Binary(self.span(first), toks[op_i], left, right, self.tspan(op_i)), left, right)
-        return left
+            op = toks[op_i]
+            level = _LEVELS.get(op)
+            if level is None or level < min_level:
+                return left
+            self.i = op_i + 1
+            if level == _PROD:
+                right = self.unary()
+            else:
+                right = self.binary(level + 1)
+            if level <= _AND:
+                op_span = Span(self.src, left.span.end, right.span.start)
+            else:
+                op_span = Span(self.src, self.starts[op_i], self.starts[op_i] + len(op))
+            left = self.nest2(ast.Binary(self.span(first), op, left, right, op_span), left, right)
+            if level == _CMP and toks[self.i] in _CMP_OPS:
+                raise Fallback  # comparisons do not chain
 
     def unary(self) -> ast.Expr:
         if self.toks[self.i] != "-":
@@ -667,7 +658,7 @@ class _Parser:
         self.i += 1
         operand = self.unary()
         self.recursion -= 1
-        return self.nest(ast.Unary(self.span(first), "-", operand), operand)
+        return self.nest1(ast.Unary(self.span(first), "-", operand), operand)
 
     def postfix(self) -> ast.Expr:
         first = self.i
@@ -675,8 +666,8 @@ class _Parser:
         tok = toks[first]
         if tok[0] in NAME_START and tok != "true" and tok != "false":
             if toks[first + 1] == "(":
-                func = self.name()
-                self.i += 1
+                func = ast.Ident(self.tspan(first), tok)
+                self.i = first + 2
                 args = self.args()
                 node = self.nest(ast.Call(self.span(first), func, args), *[a.value for a in args])
             else:
@@ -687,7 +678,7 @@ class _Parser:
         while toks[self.i] == ".":
             self.i += 1
             attr = self.name()
-            node = self.nest(ast.Attr(self.span(first), node, attr), node)
+            node = self.nest1(ast.Attr(self.span(first), node, attr), node)
         return node
 
     def atom(self) -> ast.Expr:
