@@ -327,22 +327,29 @@ class Design:
 
 
 def walk_expr(e: Expr):
-    """Every sub-expression of `e`, `e` first."""
-    yield e
-    if isinstance(e, Field):
-        yield from walk_expr(e.obj)
-    elif isinstance(e, Call):
-        for a in e.args:
-            yield from walk_expr(a)
-    elif isinstance(e, Unary):
-        yield from walk_expr(e.operand)
-    elif isinstance(e, Binary):
-        yield from walk_expr(e.left)
-        yield from walk_expr(e.right)
-    elif isinstance(e, IfExpr):
-        yield from walk_expr(e.cond)
-        yield from walk_expr(e.then)
-        yield from walk_expr(e.else_)
+    """Every sub-expression of `e`, `e` first (pre-order, left to right).
+
+    Iterative: nested generators would cost a step per level for every
+    node, which is quadratic in long `a and b and c ...` chains.
+    """
+    stack = [e]
+    pop, push = stack.pop, stack.append
+    while stack:
+        x = pop()
+        yield x
+        if isinstance(x, Binary):
+            push(x.right)
+            push(x.left)
+        elif isinstance(x, Field):
+            push(x.obj)
+        elif isinstance(x, Call):
+            stack.extend(reversed(x.args))
+        elif isinstance(x, Unary):
+            push(x.operand)
+        elif isinstance(x, IfExpr):
+            push(x.else_)
+            push(x.then)
+            push(x.cond)
 
 
 def walk_stmts(stmts: list[Stmt]):
