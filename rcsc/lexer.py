@@ -18,6 +18,7 @@ reports it.
 from __future__ import annotations
 
 import re
+import sys
 
 # Blanks and comments as in the grammar (`WS`, `COMMENT`, `BLOCK_COMMENT`);
 # `\s` would also accept vertical tabs and Unicode spaces, which the
@@ -45,24 +46,33 @@ NAME_START = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_")
 DIGITS = frozenset("0123456789")
 
 
-def tokenize(text: str) -> tuple[list[str], list[int]]:
-    """The tokens of `text` and their start offsets, ending with EOF at len(text)."""
+def tokenize(text: str) -> tuple[list[str], list[int], list[int]]:
+    """The tokens of `text`, their start and their end offsets, ending with
+    EOF at len(text).
+
+    Token texts are interned: a design repeats the same few hundred names
+    and keywords, and the AST keeps one copy of each instead of one per use.
+    """
     toks: list[str] = []
     starts: list[int] = []
+    ends: list[int] = []
     pos = 0
-    append_tok, append_start = toks.append, starts.append
+    append_tok, append_start, append_end = toks.append, starts.append, ends.append
+    intern = sys.intern
     for trivia, tok in _TOKEN.findall(text):
         if not tok:  # the end
             break
         pos += len(trivia)
-        append_tok(tok)
+        append_tok(intern(tok))
         append_start(pos)
         pos += len(tok)
+        append_end(pos)
     # Every match starts where the previous one ended (a token can be any
     # character, and the end matches too), so the offsets above are exact.
     append_tok(EOF)
     append_start(len(text))
-    return toks, starts
+    append_end(len(text))
+    return toks, starts, ends
 
 
 def is_float(tok: str) -> bool:

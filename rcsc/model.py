@@ -30,13 +30,20 @@ Value = Union[bool, int, float, str, dict]  # enums are member names; records di
 # ---- expressions -------------------------------------------------------------
 
 
-@dataclass
-class Expr:
+class _Compiled:
+    """The root of the expression classes: a slot where `rcsc.evaluate` keeps
+    an expression's compiled closure."""
+
+    __slots__ = ("_compiled",)
+
+
+@dataclass(slots=True)
+class Expr(_Compiled):
     span: Span
     type: Type
 
 
-@dataclass
+@dataclass(slots=True)
 class Const(Expr):
     """A literal or a folded constant expression. `name` keeps a constant's name for readable code."""
 
@@ -44,7 +51,7 @@ class Const(Expr):
     name: str | None = None
 
 
-@dataclass
+@dataclass(slots=True)
 class Ref(Expr):
     """A named value. kind: gm | local | status | param | arg (function argument)."""
 
@@ -52,12 +59,12 @@ class Ref(Expr):
     name: str
 
 
-@dataclass
+@dataclass(slots=True)
 class InState(Expr):
     """Time since the plan entered its current state (a duration)."""
 
 
-@dataclass
+@dataclass(slots=True)
 class SubView(Expr):
     """The supervisor's view of a subordinate's status buffer.
 
@@ -70,13 +77,13 @@ class SubView(Expr):
     value: str | None = None
 
 
-@dataclass
+@dataclass(slots=True)
 class Field(Expr):
     obj: Expr
     name: str
 
 
-@dataclass
+@dataclass(slots=True)
 class Call(Expr):
     """kind: fn | extern | builtin (abs/min/max) | convert (i32/i64/u32/f64) | record."""
 
@@ -85,20 +92,20 @@ class Call(Expr):
     args: list[Expr]
 
 
-@dataclass
+@dataclass(slots=True)
 class Unary(Expr):
     op: str  # "-" or "not"
     operand: Expr
 
 
-@dataclass
+@dataclass(slots=True)
 class Binary(Expr):
     op: str  # + - * / % == != < <= > >= and or
     left: Expr
     right: Expr
 
 
-@dataclass
+@dataclass(slots=True)
 class IfExpr(Expr):
     cond: Expr
     then: Expr
@@ -108,12 +115,12 @@ class IfExpr(Expr):
 # ---- statements and jobs -------------------------------------------------------
 
 
-@dataclass
+@dataclass(slots=True)
 class Stmt:
     span: Span
 
 
-@dataclass
+@dataclass(slots=True)
 class LValue:
     span: Span
     kind: str  # gm | local | status
@@ -122,19 +129,19 @@ class LValue:
     type: Type
 
 
-@dataclass
+@dataclass(slots=True)
 class Assign(Stmt):
     target: LValue
     op: str  # = += -= *=
     value: Expr
 
 
-@dataclass
+@dataclass(slots=True)
 class CallStmt(Stmt):
     call: Call
 
 
-@dataclass
+@dataclass(slots=True)
 class Command(Stmt):
     sub: str
     verb: str
@@ -142,12 +149,12 @@ class Command(Stmt):
     sub_span: Span = None  # type: ignore[assignment]
 
 
-@dataclass
+@dataclass(slots=True)
 class Report(Stmt):
     status: str
 
 
-@dataclass
+@dataclass(slots=True)
 class If(Stmt):
     branches: list[tuple[Expr, list[Stmt]]]
     else_body: list[Stmt]

@@ -66,7 +66,7 @@ class _Parser:
     def __init__(self, source: SourceFile, diags: Diagnostics) -> None:
         self.src = source
         self.diags = diags
-        self.toks, self.starts = tokenize(source.text)
+        self.toks, self.starts, self.ends = tokenize(source.text)
         self.i = 0
         self.recursion = 0
         self.too_deep = False
@@ -83,11 +83,10 @@ class _Parser:
 
     def span(self, first: int) -> Span:
         """The span from token `first` to the last token read."""
-        last = self.i - 1
-        return Span(self.src, self.starts[first], self.starts[last] + len(self.toks[last]))
+        return Span(self.src, self.starts[first], self.ends[self.i - 1])
 
     def tspan(self, i: int) -> Span:
-        return Span(self.src, self.starts[i], self.starts[i] + len(self.toks[i]))
+        return Span(self.src, self.starts[i], self.ends[i])
 
     def name(self) -> ast.Ident:
         """A NAME where the grammar expects nothing else (any word)."""
@@ -96,7 +95,7 @@ class _Parser:
         if tok[0] not in NAME_START:
             raise Fallback
         self.i = i + 1
-        return ast.Ident(Span(self.src, self.starts[i], self.starts[i] + len(tok)), tok)
+        return ast.Ident(Span(self.src, self.starts[i], self.ends[i]), tok)
 
     def enter(self) -> None:
         self.recursion += 1
@@ -645,7 +644,7 @@ class _Parser:
             if level <= _AND:
                 op_span = Span(self.src, left.span.end, right.span.start)
             else:
-                op_span = Span(self.src, self.starts[op_i], self.starts[op_i] + len(op))
+                op_span = Span(self.src, self.starts[op_i], self.ends[op_i])
             left = self.nest2(ast.Binary(self.span(first), op, left, right, op_span), left, right)
             if level == _CMP and toks[self.i] in _CMP_OPS:
                 raise Fallback  # comparisons do not chain
