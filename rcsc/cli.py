@@ -16,7 +16,6 @@ Contract with CI (DESIGN.md section 6):
 from __future__ import annotations
 
 import argparse
-import gc
 import os
 import sys
 import traceback
@@ -117,8 +116,6 @@ def _check(path: str, cache: bool = False):
     With `cache`, the guard analysis uses the design's `.rcsc-cache/` folder.
     """
     driver = _load_driver()
-    # What an earlier run in this process froze (below) may be collected again.
-    gc.unfreeze()
     try:
         if cache:
             from rcsc.cache import folder_for
@@ -128,10 +125,6 @@ def _check(path: str, cache: bool = False):
             result = driver.check_path(path)
     except driver.InputError as exc:
         raise UsageError(str(exc)) from exc
-    # What the run built lives until the command ends: keep the garbage
-    # collector from walking it again and again (a large design has
-    # millions of objects; each full collection would scan all of them).
-    gc.freeze()
     return result
 
 

@@ -39,12 +39,19 @@ def check_path(path: str, cache_dir: str | None = None) -> CheckResult:
     """
     # A compiler run allocates many long-lived objects and frees few: the
     # cyclic garbage collector would spend about half of a large design's
-    # check time scanning them for nothing, so it pauses for the run.
+    # check time scanning them for nothing, so it pauses for the run.  When
+    # it resumes, what the run built is frozen (moved out of the collector's
+    # reach; reference counting still frees it), or the first collections
+    # after the run would walk the whole heap.  What an earlier run froze is
+    # unfrozen first, so a long-lived process (an editor's language server,
+    # a test suite) does not keep the garbage of every run.
     was_enabled = gc.isenabled()
     gc.disable()
+    gc.unfreeze()
     try:
         return _check_path(path, cache_dir)
     finally:
+        gc.freeze()
         if was_enabled:
             gc.enable()
 

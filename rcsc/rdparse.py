@@ -21,9 +21,24 @@ before it reads a word as a name; the expression levels differ (`if` starts
 an expression only at the top level of one, `not` only at the `not` level,
 so `-not` is the name `not`, as in the reference parser).
 
-Adding a construct to the grammar means adding one method here and one
-entry in a dispatch table (`_ITEMS`, `_CTRL_ITEMS`, `_CTRL_ATTRS` or
-`_CPU_ITEMS`); see docs/internals.md.
+Adding a construct to the grammar (`grammar/rcs.lark`) means, besides the
+Lark transformer method in `rcsc.parse` and the field in `rcsc.ast`:
+
+- one method here and one entry in a dispatch table: `_ITEMS` (top-level
+  items), `_CTRL_ATTRS` (`controller X level 1 budget 2 ms ...`),
+  `_CTRL_ITEMS` (controller body) or `_CPU_ITEMS` (cpu body); a controller
+  attribute such as `period 10 ms` is `("period", self.duration())`;
+- if the construct makes a word a keyword where a name may also stand
+  (expression start: `expr`/`binary`/`postfix`; block statements: `stmt`;
+  jobs: `job`; guards, states and next states: `rule`, `state_pat`,
+  `next_state`), the check of that word before the name is read;
+- a new operator or punctuation character in `rcsc.lexer._TOKEN` (longer
+  operators before their prefixes, as Lark orders them);
+- an example in tests/test_fastparse.py (CORNERS), which compares both
+  parsers on it.
+
+A construct the fast parser does not know yet is not wrong, only slow: the
+file falls back to the reference parser.
 """
 
 from __future__ import annotations
