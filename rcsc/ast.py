@@ -1,7 +1,8 @@
 """The abstract syntax tree: what the engineer wrote, with a span on every node.
 
 The tree mirrors the text closely (no name resolution, no types); `rcsc.sema`
-turns it into the checked design model of `rcsc.model`.
+turns it into the checked design model of `rcsc.model`.  Nodes have slots
+(no per-instance dictionary): a large design has millions of them.
 """
 
 from __future__ import annotations
@@ -11,12 +12,19 @@ from dataclasses import dataclass, field
 from rcsc.source import Span
 
 
-@dataclass
-class Node:
+class _Slots:
+    """The root of the node classes: a slot for the nesting depth the parser
+    records on expressions and statements (see `rcsc.parse.MAX_NESTING`)."""
+
+    __slots__ = ("depth",)
+
+
+@dataclass(slots=True)
+class Node(_Slots):
     span: Span
 
 
-@dataclass
+@dataclass(slots=True)
 class Ident(Node):
     """A name together with the span of just that name."""
 
@@ -26,62 +34,62 @@ class Ident(Node):
 # ---- expressions -------------------------------------------------------------
 
 
-@dataclass
+@dataclass(slots=True)
 class Expr(Node):
     pass
 
 
-@dataclass
+@dataclass(slots=True)
 class IntLit(Expr):
     value: int
 
 
-@dataclass
+@dataclass(slots=True)
 class FloatLit(Expr):
     value: float
 
 
-@dataclass
+@dataclass(slots=True)
 class BoolLit(Expr):
     value: bool
 
 
-@dataclass
+@dataclass(slots=True)
 class DurationLit(Expr):
     nanos: int
     text: str
 
 
-@dataclass
+@dataclass(slots=True)
 class Name(Expr):
     name: str
 
 
-@dataclass
+@dataclass(slots=True)
 class Attr(Expr):
     obj: Expr
     attr: Ident
 
 
-@dataclass
+@dataclass(slots=True)
 class Arg(Node):
     name: Ident | None
     value: Expr
 
 
-@dataclass
+@dataclass(slots=True)
 class Call(Expr):
     func: Ident
     args: list[Arg]
 
 
-@dataclass
+@dataclass(slots=True)
 class Unary(Expr):
     op: str  # "-" or "not"
     operand: Expr
 
 
-@dataclass
+@dataclass(slots=True)
 class Binary(Expr):
     op: str  # + - * / % == != < <= > >= and or
     left: Expr
@@ -89,7 +97,7 @@ class Binary(Expr):
     op_span: Span
 
 
-@dataclass
+@dataclass(slots=True)
 class IfExpr(Expr):
     cond: Expr
     then: Expr
@@ -99,36 +107,36 @@ class IfExpr(Expr):
 # ---- statements and jobs -------------------------------------------------------
 
 
-@dataclass
+@dataclass(slots=True)
 class Stmt(Node):
     pass
 
 
-@dataclass
+@dataclass(slots=True)
 class Assign(Stmt):
     target: list[Ident]  # a.b.c
     op: str  # = += -= *=
     value: Expr
 
 
-@dataclass
+@dataclass(slots=True)
 class CallStmt(Stmt):
     call: Call
 
 
-@dataclass
+@dataclass(slots=True)
 class Command(Stmt):
     sub: Ident
     verb: Ident
     args: list[Arg]
 
 
-@dataclass
+@dataclass(slots=True)
 class Report(Stmt):
     status: Ident
 
 
-@dataclass
+@dataclass(slots=True)
 class If(Stmt):
     branches: list[tuple[Expr, list[Stmt]]]
     else_body: list[Stmt] | None
@@ -137,45 +145,45 @@ class If(Stmt):
 # ---- declarations --------------------------------------------------------------
 
 
-@dataclass
+@dataclass(slots=True)
 class TypeRef(Node):
     name: Ident
     lo: Expr | None = None
     hi: Expr | None = None
 
 
-@dataclass
+@dataclass(slots=True)
 class Param(Node):
     name: Ident
     type: TypeRef
 
 
-@dataclass
+@dataclass(slots=True)
 class Import(Node):
     target: str  # "std.math" or a relative path
     is_file: bool
 
 
-@dataclass
+@dataclass(slots=True)
 class Const(Node):
     name: Ident
     type: TypeRef
     value: Expr
 
 
-@dataclass
+@dataclass(slots=True)
 class Enum(Node):
     name: Ident
     members: list[Ident]
 
 
-@dataclass
+@dataclass(slots=True)
 class Record(Node):
     name: Ident
     fields: list[Param]
 
 
-@dataclass
+@dataclass(slots=True)
 class GmVar(Node):
     name: Ident
     type: TypeRef
@@ -183,7 +191,7 @@ class GmVar(Node):
     from_env: bool
 
 
-@dataclass
+@dataclass(slots=True)
 class Function(Node):
     name: Ident
     params: list[Param]
@@ -191,7 +199,7 @@ class Function(Node):
     body: Expr
 
 
-@dataclass
+@dataclass(slots=True)
 class Extern(Node):
     name: Ident
     params: list[Param]
@@ -199,32 +207,32 @@ class Extern(Node):
     budget: DurationLit
 
 
-@dataclass
+@dataclass(slots=True)
 class Verb(Node):
     name: Ident
     params: list[Param]
 
 
-@dataclass
+@dataclass(slots=True)
 class VerbSet(Node):
     name: Ident
     verbs: list[Verb]
 
 
-@dataclass
+@dataclass(slots=True)
 class StatePat(Node):
     kind: str  # "new", "any", "named"
     name: str | None = None
 
 
-@dataclass
+@dataclass(slots=True)
 class NextState(Node):
     kind: str  # "named", "done", "error", "same", "new"
     name: str | None = None
     code: Expr | None = None
 
 
-@dataclass
+@dataclass(slots=True)
 class Rule(Node):
     label: Ident
     guard: Expr | None  # None: the `otherwise` rule of its state
@@ -234,7 +242,7 @@ class Rule(Node):
     jobs: list[Stmt]
 
 
-@dataclass
+@dataclass(slots=True)
 class Plan(Node):
     name: Ident
     continuous: bool
@@ -242,7 +250,7 @@ class Plan(Node):
     modifiers: list[Ident] = field(default_factory=list)
 
 
-@dataclass
+@dataclass(slots=True)
 class Decl(Node):
     """A named, typed member of a controller (status field or local)."""
 
@@ -251,12 +259,12 @@ class Decl(Node):
     init: Expr
 
 
-@dataclass
+@dataclass(slots=True)
 class NameList(Node):
     names: list[Ident]
 
 
-@dataclass
+@dataclass(slots=True)
 class Controller(Node):
     name: Ident
     simulator: bool
@@ -276,7 +284,7 @@ class Controller(Node):
     plans: list[Plan] = field(default_factory=list)
 
 
-@dataclass
+@dataclass(slots=True)
 class Cpu(Node):
     name: Ident
     heartbeat: list[DurationLit] = field(default_factory=list)
@@ -284,7 +292,7 @@ class Cpu(Node):
     schedule: list[NameList] = field(default_factory=list)
 
 
-@dataclass
+@dataclass(slots=True)
 class File(Node):
     """One parsed source file: `design NAME` or `module a.b`, then items."""
 

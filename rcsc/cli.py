@@ -110,17 +110,30 @@ def _load_driver() -> ModuleType:
     return driver
 
 
-def _check(path: str):
-    """Run the front end on `path`; an unreadable root file is a usage error (exit 2)."""
+def _check(path: str, cache: bool = False):
+    """Run the front end on `path`; an unreadable root file is a usage error (exit 2).
+
+    With `cache`, the guard analysis uses the design's `.rcsc-cache/` folder.
+    """
     driver = _load_driver()
     try:
-        return driver.check_path(path)
+        if cache:
+            from rcsc.cache import folder_for
+
+            result = driver.check_path(path, cache_dir=folder_for(path))
+        else:
+            result = driver.check_path(path)
     except driver.InputError as exc:
         raise UsageError(str(exc)) from exc
+    return result
 
 
 def _add_check_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("path", metavar="PATH", help="the design's root file (it begins with `design NAME`)")
+    p.add_argument(
+        "--no-cache", action="store_true",
+        help="do not read or write the guard-analysis cache (.rcsc-cache/ next to the design; also RCSC_NO_CACHE=1)",
+    )
     _add_report_arguments(p)
 
 
@@ -136,7 +149,7 @@ def _add_report_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_check(args: argparse.Namespace) -> int:
-    result = _check(args.path)
+    result = _check(args.path, cache=not args.no_cache)
     color = args.format == "human" and _use_color(args.color, args.output)
     _emit_report(_render(result.diags, args.format, color), args.output)
     return _exit_code(result.diags, args.deny_warnings)

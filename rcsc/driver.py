@@ -10,7 +10,8 @@ from __future__ import annotations
 import gc
 from dataclasses import dataclass
 
-from rcsc.checks import check_model
+from rcsc import cache
+from rcsc.checks import check_model, guards
 from rcsc.diagnostics import Diagnostics
 from rcsc.loader import InputError, LoadedFile, path_to_files
 from rcsc.model import Design
@@ -30,21 +31,32 @@ class CheckResult:
         return not self.diags.has_errors()
 
 
-def check_path(path: str) -> CheckResult:
-    """Load, analyse and check the design whose root file is `path`."""
+def check_path(path: str, cache_dir: str | None = None) -> CheckResult:
+    """Load, analyse and check the design whose root file is `path`.
+
+    With `cache_dir` (see `rcsc.cache`), results of the guard analysis are
+    read from and written to that folder.
+    """
     # A compiler run allocates many long-lived objects and frees few: the
     # cyclic garbage collector would spend about half of a large design's
-    # check time scanning them for nothing, so it pauses for the run.
+    # check time scanning them for nothing, so it pauses for the run.  When
+    # it resumes, what the run built is frozen (moved out of the collector's
+    # reach; reference counting still frees it), or the first collections
+    # after the run would walk the whole heap.  What an earlier run froze is
+    # unfrozen first, so a long-lived process (an editor's language server,
+    # a test suite) does not keep the garbage of every run.
     was_enabled = gc.isenabled()
     gc.disable()
+    gc.unfreeze()
     try:
-        return _check_path(path)
+        return _check_path(path, cache_dir)
     finally:
+        gc.freeze()
         if was_enabled:
             gc.enable()
 
 
-def _check_path(path: str) -> CheckResult:
+def _check_path(path: str, cache_dir: str | None) -> CheckResult:
     diags = Diagnostics()
     files = path_to_files(path, diags)
     if any(f.tree is None for f in files):
@@ -52,5 +64,8 @@ def _check_path(path: str) -> CheckResult:
         # follow-on findings; report the syntax errors alone.
         return CheckResult(diags, None, files)
     design = ast_to_model(files, diags)
-    check_model(design, diags)
+    store = None
+    if cache_dir is not None and not cache.disabled_by_environment():
+        store = cache.Store(cache_dir, "guards")
+    check_model(design, diags, guards.Options(store=store))
     return CheckResult(diags, design, files)

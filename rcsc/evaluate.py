@@ -100,12 +100,12 @@ def _compile(e: m.Expr):
     f = _COMPILERS.get(type(e), _c_other)(e)
     # Kept with the node it belongs to, so that a copied node (whose closure
     # would still read the original) is recompiled rather than trusted.
-    e.__dict__["_compiled"] = (e, f)
+    e._compiled = (e, f)
     return f
 
 
 def _sub(e: m.Expr):
-    entry = e.__dict__.get("_compiled")
+    entry = getattr(e, "_compiled", None)
     return entry[1] if entry is not None and entry[0] is e else _compile(e)
 
 

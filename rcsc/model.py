@@ -30,13 +30,20 @@ Value = Union[bool, int, float, str, dict]  # enums are member names; records di
 # ---- expressions -------------------------------------------------------------
 
 
-@dataclass
-class Expr:
+class _Compiled:
+    """The root of the expression classes: a slot where `rcsc.evaluate` keeps
+    an expression's compiled closure."""
+
+    __slots__ = ("_compiled",)
+
+
+@dataclass(slots=True)
+class Expr(_Compiled):
     span: Span
     type: Type
 
 
-@dataclass
+@dataclass(slots=True)
 class Const(Expr):
     """A literal or a folded constant expression. `name` keeps a constant's name for readable code."""
 
@@ -44,7 +51,7 @@ class Const(Expr):
     name: str | None = None
 
 
-@dataclass
+@dataclass(slots=True)
 class Ref(Expr):
     """A named value. kind: gm | local | status | param | arg (function argument)."""
 
@@ -52,12 +59,12 @@ class Ref(Expr):
     name: str
 
 
-@dataclass
+@dataclass(slots=True)
 class InState(Expr):
     """Time since the plan entered its current state (a duration)."""
 
 
-@dataclass
+@dataclass(slots=True)
 class Age(Expr):
     """`age(V)` of a Global Memory variable V: the reader's release instant minus
     the instant the value it read became visible (a duration).
@@ -68,7 +75,7 @@ class Age(Expr):
     name: str
 
 
-@dataclass
+@dataclass(slots=True)
 class SubView(Expr):
     """The supervisor's view of a subordinate's status buffer.
 
@@ -81,13 +88,13 @@ class SubView(Expr):
     value: str | None = None
 
 
-@dataclass
+@dataclass(slots=True)
 class Field(Expr):
     obj: Expr
     name: str
 
 
-@dataclass
+@dataclass(slots=True)
 class Call(Expr):
     """kind: fn | extern | builtin (abs/min/max) | convert (i32/i64/u32/f64) | record."""
 
@@ -96,20 +103,20 @@ class Call(Expr):
     args: list[Expr]
 
 
-@dataclass
+@dataclass(slots=True)
 class Unary(Expr):
     op: str  # "-" or "not"
     operand: Expr
 
 
-@dataclass
+@dataclass(slots=True)
 class Binary(Expr):
     op: str  # + - * / % == != < <= > >= and or
     left: Expr
     right: Expr
 
 
-@dataclass
+@dataclass(slots=True)
 class IfExpr(Expr):
     cond: Expr
     then: Expr
@@ -119,12 +126,12 @@ class IfExpr(Expr):
 # ---- statements and jobs -------------------------------------------------------
 
 
-@dataclass
+@dataclass(slots=True)
 class Stmt:
     span: Span
 
 
-@dataclass
+@dataclass(slots=True)
 class LValue:
     span: Span
     kind: str  # gm | local | status
@@ -133,19 +140,19 @@ class LValue:
     type: Type
 
 
-@dataclass
+@dataclass(slots=True)
 class Assign(Stmt):
     target: LValue
     op: str  # = += -= *=
     value: Expr
 
 
-@dataclass
+@dataclass(slots=True)
 class CallStmt(Stmt):
     call: Call
 
 
-@dataclass
+@dataclass(slots=True)
 class Command(Stmt):
     sub: str
     verb: str
@@ -153,12 +160,12 @@ class Command(Stmt):
     sub_span: Span = None  # type: ignore[assignment]
 
 
-@dataclass
+@dataclass(slots=True)
 class Report(Stmt):
     status: str
 
 
-@dataclass
+@dataclass(slots=True)
 class If(Stmt):
     branches: list[tuple[Expr, list[Stmt]]]
     else_body: list[Stmt]
@@ -369,22 +376,29 @@ class Design:
 
 
 def walk_expr(e: Expr):
-    """Every sub-expression of `e`, `e` first."""
-    yield e
-    if isinstance(e, Field):
-        yield from walk_expr(e.obj)
-    elif isinstance(e, Call):
-        for a in e.args:
-            yield from walk_expr(a)
-    elif isinstance(e, Unary):
-        yield from walk_expr(e.operand)
-    elif isinstance(e, Binary):
-        yield from walk_expr(e.left)
-        yield from walk_expr(e.right)
-    elif isinstance(e, IfExpr):
-        yield from walk_expr(e.cond)
-        yield from walk_expr(e.then)
-        yield from walk_expr(e.else_)
+    """Every sub-expression of `e`, `e` first (pre-order, left to right).
+
+    Iterative: nested generators would cost a step per level for every
+    node, which is quadratic in long `a and b and c ...` chains.
+    """
+    stack = [e]
+    pop, push = stack.pop, stack.append
+    while stack:
+        x = pop()
+        yield x
+        if isinstance(x, Binary):
+            push(x.right)
+            push(x.left)
+        elif isinstance(x, Field):
+            push(x.obj)
+        elif isinstance(x, Call):
+            stack.extend(reversed(x.args))
+        elif isinstance(x, Unary):
+            push(x.operand)
+        elif isinstance(x, IfExpr):
+            push(x.else_)
+            push(x.then)
+            push(x.cond)
 
 
 def walk_stmts(stmts: list[Stmt]):

@@ -1,15 +1,23 @@
 """Parsing: source text to AST (`text_to_ast`).
 
-The grammar lives in `grammar/rcs.lark` (shipped as `rcsc.grammar`).  Lark
-builds a parse tree with positions; a Transformer turns it into `rcsc.ast`
-nodes whose spans cover exactly the text they came from.  A syntax error
-becomes one diagnostic (E0001/E0002) with the expected tokens spelled out
-the way an engineer reads them.
+The reference grammar lives in `grammar/rcs.lark` (shipped as
+`rcsc.grammar`).  Lark builds a parse tree with positions; a Transformer
+turns it into `rcsc.ast` nodes whose spans cover exactly the text they came
+from.  A syntax error becomes one diagnostic (E0001/E0002) with the expected
+tokens spelled out the way an engineer reads them.
+
+`text_to_ast` first tries the fast hand-written parser (`rcsc.rdparse`),
+which builds the same tree without a parse tree in between, and uses Lark
+only for a file the fast parser leaves to it (a syntax error, very deep
+nesting, bidirectional-text controls).  `RCSC_PARSER=lark` in the
+environment, or `text_to_ast_lark`, uses Lark for every file.
 """
 
 from __future__ import annotations
 
 import math
+import os
+import re
 import unicodedata
 from fractions import Fraction
 from functools import lru_cache
@@ -548,8 +556,29 @@ class _ToAst(Transformer_NonRecursive):
         return self.nest(ast.IfExpr(self.span(meta), *children), *children)
 
 
+# Characters that reorder text on screen.  A file holding one goes to the
+# reference parser, so that however the language treats them is decided in
+# one place (the grammar).
+_BIDI_CONTROLS = re.compile("[\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069]")
+
+
 def text_to_ast(source: SourceFile, diags: Diagnostics) -> ast.File | None:
     """Parse one file.  Returns None (with a diagnostic) on a syntax error."""
+    if os.environ.get("RCSC_PARSER") != "lark" and not _BIDI_CONTROLS.search(source.text):
+        from rcsc.rdparse import Fallback, parse_fast
+
+        try:
+            tree, found = parse_fast(source)
+        except Fallback:
+            pass
+        else:
+            diags.extend(found)
+            return tree
+    return text_to_ast_lark(source, diags)
+
+
+def text_to_ast_lark(source: SourceFile, diags: Diagnostics) -> ast.File | None:
+    """Parse one file with the reference (Lark) parser."""
     return parse_with(_parser(), _ToAst, source, diags)
 
 

@@ -9,6 +9,7 @@ to create in large designs.
 from __future__ import annotations
 
 import bisect
+import itertools
 import re
 from dataclasses import dataclass, field
 
@@ -38,11 +39,9 @@ class SourceFile:
             self.text = self.text[1:]
         if "\r" in self.text:
             self.text = _LONE_CR.sub("\n", self.text)
-        starts = [0]
-        for i, ch in enumerate(self.text):
-            if ch == "\n":
-                starts.append(i + 1)
-        self._line_starts = starts
+        # Line starts from the line lengths (done in C: a large design has
+        # hundreds of thousands of lines).
+        self._line_starts = [0, *itertools.accumulate(len(line) + 1 for line in self.text.split("\n")[:-1])]
 
     def line_col(self, offset: int) -> tuple[int, int]:
         """1-based (line, column) of a character offset."""
@@ -63,13 +62,21 @@ class SourceFile:
         return len(self._line_starts)
 
 
-@dataclass(frozen=True)
 class Span:
-    """A half-open character range [start, end) of a source file."""
+    """A half-open character range [start, end) of a source file.
 
-    file: SourceFile
-    start: int
-    end: int
+    Treated as immutable.  A plain class with slots rather than a frozen
+    dataclass: a large design has millions of spans, and a frozen
+    dataclass's constructor is several times slower and its instances
+    larger.
+    """
+
+    __slots__ = ("file", "start", "end")
+
+    def __init__(self, file: SourceFile, start: int, end: int) -> None:
+        self.file = file
+        self.start = start
+        self.end = end
 
     @property
     def line(self) -> int:

@@ -101,6 +101,34 @@ def _literal_values(node: ast.Expr):
             yield from _literal_values(arg.value)
 
 
+def _known(e: m.Expr) -> bool:
+    """Whether a folded operand may have a compile-time value: a constant, or
+    a record-typed expression (those are never replaced by a Const)."""
+    return isinstance(e, m.Const) or isinstance(e.type, RecordType)
+
+
+def _may_fold(e: m.Expr) -> bool:
+    """False when evaluating `e` would surely stop at an operand that is not
+    constant: operands are folded first (bottom-up), so an operand still not
+    a Const is not constant, and the evaluator reads it before anything
+    else.  Only `and`, `or` and `if` may skip an operand, so for them just
+    the operand read first counts.  This keeps folding linear: without it
+    every level of `a + b + c + ...` would evaluate its whole left side."""
+    if isinstance(e, m.Binary):
+        if e.op in ("and", "or"):
+            return _known(e.left)
+        return _known(e.left) and _known(e.right)
+    if isinstance(e, m.Unary):
+        return _known(e.operand)
+    if isinstance(e, m.Field):
+        return _known(e.obj)
+    if isinstance(e, m.IfExpr):
+        return _known(e.cond)
+    if isinstance(e, m.Call):
+        return all(_known(a) for a in e.args)
+    return True
+
+
 def describe(t: Type) -> str:
     return "an integer literal" if t is None else f"`{t}`"
 
@@ -123,7 +151,7 @@ class Checker:
 
     def fold(self, e: m.Expr) -> m.Expr:
         """Replace a constant sub-tree by its value (numeric rules apply)."""
-        if isinstance(e, m.Const) or isinstance(e.type, (ErrorType, RecordType)):
+        if isinstance(e, m.Const) or isinstance(e.type, (ErrorType, RecordType)) or not _may_fold(e):
             return e
         try:
             value = eval_expr(e, FoldEnv(self.g))

@@ -12,6 +12,17 @@ GOLDEN = TESTS / "golden"
 
 
 # ---------------------------------------------------------------------------
+# no on-disk cache by default
+# ---------------------------------------------------------------------------
+
+@pytest.fixture(autouse=True)
+def _no_disk_cache(monkeypatch):
+    """`rcsc check` would write `.rcsc-cache/` next to every design it checks,
+    examples/ included; tests of the cache (test_cache.py) turn it back on."""
+    monkeypatch.setenv("RCSC_NO_CACHE", "1")
+
+
+# ---------------------------------------------------------------------------
 # golden files
 # ---------------------------------------------------------------------------
 

@@ -33,3 +33,13 @@ def test_rust_benchmark_cross_checks_rust_against_c() -> None:
     assert re.search(r"cross-check: .* after every step \(digest [0-9a-f]+\): yes", proc.stdout), proc.stdout
     rust = re.search(r"^Rust release\s+([\d.]+)", proc.stdout, re.M)
     assert rust and float(rust.group(1)) > 0, proc.stdout
+
+
+def test_check_benchmark_prints_every_column_and_stage() -> None:
+    """bench/bench_check.py on tiny designs: fresh-process cold/warm/edit runs and the stage breakdown."""
+    script = Path(__file__).resolve().parents[1] / "bench" / "bench_check.py"
+    proc = subprocess.run([sys.executable, str(script), "--sizes", "2,3", "--plans", "3", "--rules", "4"], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    rows = [line for line in proc.stdout.splitlines() if line.strip().startswith(("2 ", "3 "))]
+    assert len(rows) == 2 and all(len(r.split("|")) == 5 for r in rows), proc.stdout
+    assert "parse" in proc.stdout and "names+types" in proc.stdout and "guards" in proc.stdout

@@ -15,7 +15,10 @@ from rcsc.model import Design
 FAMILIES = (hierarchy, ownership, plans, timing, guards)
 
 
-def check_model(design: Design, diags: Diagnostics) -> None:
+def check_model(design: Design, diags: Diagnostics, guard_options: guards.Options | None = None) -> None:
     """Run every check family; findings go to `diags`."""
     for family in FAMILIES:
-        family.check(design, diags)
+        if family is guards:
+            guards.check(design, diags, guard_options)
+        else:
+            family.check(design, diags)

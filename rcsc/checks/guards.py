@@ -146,6 +146,8 @@ class Options:
     timeout_ms: int = field(default_factory=lambda: _env_int("RCSC_GUARD_TIMEOUT_MS", TIMEOUT_MS))
     rlimit: int = field(default_factory=lambda: _env_int("RCSC_GUARD_RLIMIT", RLIMIT))
     cache: bool = True
+    # Where results outlive the run (`rcsc.cache`); None: kept in memory only.
+    store: object = None
 
 
 @dataclass
@@ -154,6 +156,7 @@ class Stats:
 
     plans: int = 0
     plans_cached: int = 0
+    plans_stored: int = 0  # answered by the on-disk cache
     queries: int = 0  # solver calls
     reused: int = 0  # questions answered by an earlier model
     forall_queries: int = 0
@@ -871,6 +874,7 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
     lit_dead = literal_dead_rules(plan)
     period = c.period_ns or None
     canon = None
+    pkey = None
     if opts.cache:
         # Ages count base ticks: a design whose base tick differs from this
         # controller's period analyses the same plan differently.
@@ -887,6 +891,15 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
             for f in findings:
                 _report(design, c, plan, _rename(f, mapping, state_map), diags)
             return
+        if opts.store is not None:
+            pkey = _stored_key(design, c, plan, canon, opts)
+            findings = _load(opts.store, pkey, design)
+            if findings is not None:
+                st.plans_stored += 1
+                cache[ckey] = (findings, list(canon.keys), dict(canon.states))
+                for f in findings:
+                    _report(design, c, plan, f, diags)
+                return
     try:
         an = _Analysis(design, c, plan, assigned, opts, st)
         findings = an.run(lit_dead)
@@ -897,8 +910,88 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
         return
     if canon is not None:
         cache[canon.key()] = (findings, list(canon.keys), dict(canon.states))
+        if pkey is not None:
+            _save(opts.store, pkey, findings)
     for f in findings:
         _report(design, c, plan, f, diags)
+
+
+# ---- the on-disk cache -----------------------------------------------------------------------
+#
+# The in-memory cache above shares one analysis between plans of the same
+# shape.  The on-disk one (rcsc.cache) is keyed more narrowly, so that a
+# stored result is exactly what analysing the plan again would give: the
+# plan's shape, the real names of its inputs, states, controller and verb,
+# the values a witness prefers (initial values), the definitions of every
+# type and function of the design, and the solver budget.
+
+
+def _stored_key(design: Design, c: m.Controller, plan: m.Plan, canon: _Canon, opts: Options) -> str:
+    from rcsc.cache import digest
+
+    types = (
+        tuple((n, tuple(t.members)) for n, t in sorted(design.enums.items())),
+        tuple((n, tuple((fn, str(ft)) for fn, ft in t.fields)) for n, t in sorted(design.records.items())),
+    )
+    fns = tuple(
+        (
+            f.name,
+            f.extern,
+            str(f.ret),
+            tuple((p.name, str(p.type), p.range and (p.range.lo, p.range.hi)) for p in f.params),
+            None if f.body is None else _ekey(f.body),
+        )
+        for _, f in sorted(design.functions.items())
+    )
+    preferred = tuple((k, _vkey(_preferred(design, c, k))) for k in canon.keys)
+    return digest(
+        (
+            "guards",
+            opts.timeout_ms,
+            opts.rlimit,
+            c.name,
+            plan.verb,
+            plan.continuous,
+            canon.key(),
+            tuple(canon.keys),
+            tuple(canon.states.items()),
+            preferred,
+            types,
+            fns,
+        )
+    )
+
+
+def _load(store, key: str, design: Design) -> list[_Finding] | None:
+    from rcsc.cache import decode
+
+    data = store.get(key)
+    if not isinstance(data, list):
+        return None
+    types = {**design.enums, **design.records}
+    names = {fl.name for fl in fields(_Finding)}
+    try:
+        out = []
+        for item in data:
+            values = decode(item, types)
+            if not isinstance(values, dict) or set(values) != names - {"span"}:
+                return None
+            out.append(_Finding(**values))
+        return out
+    except (KeyError, ValueError, TypeError, OverflowError):
+        return None
+
+
+def _save(store, key: str, findings: list[_Finding]) -> None:
+    from rcsc.cache import NotStorable, encode
+
+    if any(f.span is not None for f in findings):
+        return  # spans belong to this run's source files
+    try:
+        data = [encode({fl.name: getattr(f, fl.name) for fl in fields(_Finding) if fl.name != "span"}) for f in findings]
+    except NotStorable:
+        return
+    store.put(key, data)
 
 
 def _rename_key(key: tuple, mapping: dict[tuple, tuple]) -> tuple:
