@@ -11,6 +11,7 @@ in /dev/shm.
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 from pathlib import Path
 
@@ -86,4 +87,37 @@ def test_torn_reads_are_caught(hammer, tmp_path):
         if r.returncode != 0:
             break
     assert r.returncode == 1 and "torn" in r.stderr
+    assert _leftovers(tag) == []
+
+
+# ---- the Rust twin (backends/rust/runtime/host/shm.rs) ------------------------------
+
+RUST_HOST = ROOT / "backends" / "rust" / "runtime" / "host"
+RUST_HAMMER = ROOT / "tests" / "rust_shm"
+
+
+@pytest.fixture(scope="module")
+def rust_hammer(tmp_path_factory):
+    root = tmp_path_factory.mktemp("rust_shm")
+    crate = root / "hammer"
+    shutil.copytree(RUST_HAMMER, crate, ignore=shutil.ignore_patterns("target", "Cargo.lock"))
+    shutil.copytree(RUST_HOST, crate / "host")
+    env = dict(os.environ, CARGO_TARGET_DIR=str(root / "target"), CARGO_TERM_COLOR="never")
+    for cmd in (["cargo", "build", "--offline", "--release"], ["cargo", "clippy", "--offline", "--release", "--", "-D", "warnings"]):
+        r = subprocess.run(cmd, cwd=crate, env=env, capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        assert "warning" not in r.stderr, r.stderr
+    r = subprocess.run(["rustfmt", "--check", "--edition", "2021", str(crate / "src" / "main.rs")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout
+    return root / "target" / "release" / "shm_hammer"
+
+
+@pytest.mark.parametrize("mode,how,n", [("proc", "free", 500_000), ("proc", "lockstep", 50_000), ("thread", "free", 500_000), ("thread", "lockstep", 50_000)])
+def test_rust_hammer(rust_hammer, mode, how, n):
+    tag = f"rcs-rhammer-{os.getpid()}-{mode}-{how}"
+    r = subprocess.run([str(rust_hammer), mode, how, str(n), "/" + tag], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert r.stderr == ""
+    reads = int(r.stdout.split()[1])
+    assert reads == n if how == "lockstep" else reads >= 2
     assert _leftovers(tag) == []

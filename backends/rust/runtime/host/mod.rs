@@ -16,6 +16,7 @@
 #![allow(dead_code, unused_imports)]
 
 mod scenario;
+pub mod shm;
 mod sys;
 mod trace;
 
