@@ -262,6 +262,7 @@ class Controller(Node):
     simulator: bool
     level: list[tuple[int, Span]] = field(default_factory=list)
     budget: list[DurationLit] = field(default_factory=list)
+    period: list[DurationLit] = field(default_factory=list)
     subordinates: list[NameList] = field(default_factory=list)
     reads: list[NameList] = field(default_factory=list)
     writes: list[NameList] = field(default_factory=list)

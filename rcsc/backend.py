@@ -374,6 +374,13 @@ class Target:
             )
             d.with_label(cpus[0].name_span, "first CPU")
             d.with_note("exchanging buffers between CPUs needs a transport, which no target has yet")
+        for c in self.design.controllers.values():
+            if c.divider > 1:
+                d = diags.add("E0801", c.period_span or c.name_span, f"the {self.name} target steps every controller every cycle; `{c.name}` has a period", "divided rate")
+                d.with_note("`rcsc sim` and `rcsc test` run divided-rate controllers")
+        for c, age in _gm_ages(self.design):
+            d = diags.add("E0801", age.span, f"the {self.name} target does not keep Global Memory stamps for `age({age.name})`", "age of Global Memory")
+            d.with_note(f"in `{c.name}`; `rcsc sim` and `rcsc test` measure it")
 
     # ---- output --------------------------------------------------------------------
 
@@ -469,3 +476,17 @@ def write_files(files: list[OutFile], out_dir: str) -> WriteResult:
         os.replace(tmp, path)
         res.written.append(f.path)
     return res
+
+
+def _gm_ages(design: m.Design):
+    """(controller, `age(V)` node) for every age of a Global Memory variable, in source order."""
+    for c in design.controllers.values():
+        exprs: list[m.Expr] = []
+        for stmts in [c.pre, c.post] + [r.jobs for p in c.plans.values() for r in p.rules]:
+            for s in m.walk_stmts(stmts):
+                exprs.extend(m.stmt_exprs(s))
+        exprs.extend(r.guard for p in c.plans.values() for r in p.rules if r.guard is not None)
+        for e in sorted(exprs, key=lambda x: x.span.start):
+            for x in m.walk_expr(e):
+                if isinstance(x, m.Age):
+                    yield c, x

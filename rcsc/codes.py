@@ -347,6 +347,12 @@ never scheduled never runs.
 A controller appears twice in schedules (on one CPU or on two). Each controller
 runs exactly once per cycle of exactly one CPU.
 """),
+    ("E0607", _E, "controller period is not a whole number of heartbeats", """
+A controller's `period D` says it steps on every n-th cycle of its CPU, so D
+must be a whole multiple n of the CPU's heartbeat (n >= 1). A controller with
+`period 50 ms` on a 20 ms CPU would have no fixed place in the cycle; choose a
+multiple (40 ms, 60 ms) or move it to a CPU whose heartbeat divides 50 ms.
+"""),
     ("E0606", _E, "the simulator runs single-CPU designs", """
 The reference simulator (`rcsc sim`, `rcsc test`) steps one CPU's schedule. A
 design with several CPUs is checked, but simulating the buffer exchange between
@@ -359,6 +365,12 @@ controllers on different CPUs share would need a transport (shared memory,
 a network) to travel between them, and no target has one yet. Rather than
 emit code that silently loses those buffers, the build is refused. Put the
 design on one CPU to build it, or check it with `rcsc check` meanwhile.
+"""),
+    ("E0801", _E, "the target does not implement divided rates or Global Memory ages yet", """
+`rcsc sim` and `rcsc test` run controllers with a `period` longer than their
+CPU's heartbeat and measure `age(V)` of Global Memory variables; the code
+generators do not yet. Rather than emit a program that steps such a controller
+every cycle or reads a made-up age, the build is refused.
 """),
     # ---- scenarios ----------------------------------------------------------
     ("E0700", _E, "operator command to a controller below the top", """
@@ -384,6 +396,11 @@ A name that CTRL does not have is almost always a typo.
     ("E0704", _E, "missing or repeated scenario setting", """
 A scenario says exactly once how many cycles it runs: `cycles 200`. Without it
 the run has no end; with two `cycles` lines it is ambiguous which one counts.
+"""),
+    ("E0705", _E, "fault injection names no CPU or controller", """
+`at N: stop CPU` stops a CPU (it runs no more cycles) and `at N: freeze CTRL`
+freezes one controller (it is not stepped any more). The name after `stop` must
+be one of the design's CPUs and the name after `freeze` one of its controllers.
 """),
     ("E0605", _E, "design has no CPU", """
 A design needs at least one `cpu` with a heartbeat and a schedule to say where

@@ -35,6 +35,9 @@ class Env:
     def sub_view(self, e: m.SubView):
         raise NotConstant(e)
 
+    def age(self, e: m.Age):
+        raise NotConstant(e)
+
     def call_extern(self, e: m.Call, args: list):
         raise NotConstant(e)
 
@@ -126,6 +129,10 @@ def _c_sub_view(e):
     return lambda env, a: env.sub_view(e)
 
 
+def _c_age(e):
+    return lambda env, a: env.age(e)
+
+
 def _c_field(e):
     obj, name = _sub(e.obj), e.name
     return lambda env, a: obj(env, a)[name]
@@ -206,6 +213,7 @@ _COMPILERS = {
     m.Ref: _c_ref,
     m.InState: _c_in_state,
     m.SubView: _c_sub_view,
+    m.Age: _c_age,
     m.Field: _c_field,
     m.Unary: _c_unary,
     m.Binary: _c_binary,

@@ -58,6 +58,17 @@ class InState(Expr):
 
 
 @dataclass
+class Age(Expr):
+    """`age(V)` of a Global Memory variable V: the reader's release instant minus
+    the instant the value it read became visible (a duration).
+
+    `age(SUB)` of a subordinate is the `SubView` with attr `age` (the same as `SUB.age`).
+    """
+
+    name: str
+
+
+@dataclass
 class SubView(Expr):
     """The supervisor's view of a subordinate's status buffer.
 
@@ -293,6 +304,28 @@ class Controller:
     budget_span: Span | None = None
     supervisor: str | None = None  # filled in by the hierarchy check
     cpu: str | None = None  # filled in by the timing check
+    # `period D` as written (0: not written), and the rate the timing check
+    # derives from it: the controller steps on every `divider`-th cycle of its
+    # CPU (cycles 1, 1 + divider, ...), so its period is divider * heartbeat.
+    declared_period_ns: int = 0
+    period_span: Span | None = None
+    divider: int = 1  # filled in by the timing check
+    period_ns: int = 0  # filled in by the timing check
+
+
+@dataclass
+class Crossing:
+    """A buffer written on one CPU and read on others (each reader keeps its own copy).
+
+    kind: gm (a Global Memory variable), cmd (the command buffer of controller
+    `name`, written by its supervisor) or status (the status buffer of
+    controller `name`, read by its supervisor).
+    """
+
+    kind: str
+    name: str
+    writer_cpu: str
+    reader_cpus: list[str]
 
 
 @dataclass
@@ -318,6 +351,15 @@ class Design:
     controllers: dict[str, Controller] = field(default_factory=dict)
     cpus: dict[str, Cpu] = field(default_factory=dict)
     files: list[str] = field(default_factory=list)
+    # Filled in by the timing check: GM variables in declaration order, then
+    # command and status buffers in controller declaration order.
+    crossings: list[Crossing] = field(default_factory=list)
+
+    @property
+    def base_tick_ns(self) -> int:
+        """The shortest heartbeat: the unit of scenario ticks (0 without CPUs)."""
+        beats = [c.heartbeat_ns for c in self.cpus.values() if c.heartbeat_ns > 0]
+        return min(beats) if beats else 0
 
     def supervisor_of(self, name: str) -> str | None:
         return self.controllers[name].supervisor

@@ -221,6 +221,10 @@ class _ToAst(Transformer_NonRecursive):
         return ("budget", children[0])
 
     @v_args(meta=True)
+    def period_attr(self, meta, children):
+        return ("period", children[0])
+
+    @v_args(meta=True)
     def subordinates_decl(self, meta, children):
         return ("subordinates", children[0])
 

@@ -59,6 +59,17 @@ class Input:
 
 
 @dataclass
+class Fault:
+    """`at N: stop CPU` (kind "stop") or `at N: freeze CTRL` (kind "freeze")."""
+
+    cycle: int
+    kind: str
+    name: str
+    span: Span
+    cycle_span: Span | None = None
+
+
+@dataclass
 class Expectation:
     kind: str  # at | within | always | final
     lo: int
@@ -76,6 +87,7 @@ class Scenario:
     commands: list[Command] = field(default_factory=list)
     inputs: list[Input] = field(default_factory=list)
     expects: list[Expectation] = field(default_factory=list)
+    faults: list[Fault] = field(default_factory=list)
 
 
 @dataclass
@@ -114,6 +126,14 @@ class _ScenarioAst(_ToAst):
     def scenario_input(self, meta, children):
         cycle, var, value = children
         return ("input", self.span(meta), self._int(cycle), self.tspan(cycle), self.ident(var), value)
+
+    @v_args(meta=True)
+    def scenario_stop(self, meta, children):
+        return ("fault", self.span(meta), self._int(children[0]), self.tspan(children[0]), "stop", self.ident(children[1]))
+
+    @v_args(meta=True)
+    def scenario_freeze(self, meta, children):
+        return ("fault", self.span(meta), self._int(children[0]), self.tspan(children[0]), "freeze", self.ident(children[1]))
 
     @v_args(meta=True)
     def scenario_expect(self, meta, children):
@@ -261,6 +281,12 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
             if inp is not None:
                 inp.cycle_span = cspan
                 sc.inputs.append(inp)
+        elif kind == "fault":
+            _, span, cycle, cspan, what, target = item
+            fault = _fault(design, diags, span, cycle, what, target)
+            if fault is not None:
+                fault.cycle_span = cspan
+                sc.faults.append(fault)
         elif kind == "expect":
             _, span, (when, lo, hi, wspan), cond = item
             e = observer.condition(cond)
@@ -277,6 +303,8 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
         return None
     sc.cycles = cycles
     for when_cycle, span in [(c.cycle, c.cycle_span or c.span) for c in sc.commands] + [(i.cycle, i.cycle_span or i.span) for i in sc.inputs] + [
+        (f.cycle, f.cycle_span or f.span) for f in sc.faults
+    ] + [
         (e.hi, e.span) for e in sc.expects if e.kind in ("at", "within")
     ] + [(e.lo, e.span) for e in sc.expects if e.kind in ("at", "within")]:
         if not 1 <= when_cycle <= cycles:
@@ -285,7 +313,21 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
         return None
     sc.commands.sort(key=lambda c: c.cycle)
     sc.inputs.sort(key=lambda i: i.cycle)
+    sc.faults.sort(key=lambda f: f.cycle)
     return sc
+
+
+def _fault(design: m.Design, diags: Diagnostics, span: Span, cycle: int, what: str, target: ast.Ident) -> Fault | None:
+    """`stop` names a CPU, `freeze` a controller; a name that is the other kind gets a hint."""
+    table, other, noun = (design.cpus, design.controllers, "CPU") if what == "stop" else (design.controllers, design.cpus, "controller")
+    if target.name in table:
+        return Fault(cycle, what, target.name, span)
+    diag = diags.add("E0705", target.span, f"`{what}` needs a {noun}; the design has no {noun} named `{target.name}`", f"not a {noun}")
+    if target.name in other:
+        diag.with_help(f"`{target.name}` is a {'controller' if what == 'stop' else 'CPU'}: write `{'freeze' if what == 'stop' else 'stop'} {target.name}`")
+    else:
+        diag.with_note(f"{noun}s: " + ", ".join(table))
+    return None
 
 
 def _command(design, checker, diags, span, cycle, cspan, ctrl: ast.Ident, verb: ast.Ident, args) -> Command | None:

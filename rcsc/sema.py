@@ -224,6 +224,12 @@ class _Sema:
         budget, budget_span = self._single(item.budget, item, "budget", lambda v: v.nanos, lambda v: v.span)
         c = m.Controller(name, item.span, item.name.span, item.simulator, level or 0, budget or 0)
         c.level_span, c.budget_span = level_span, budget_span
+        # `period` is optional (default: every cycle of its CPU); the timing
+        # check relates it to the CPU's heartbeat once the controller is placed.
+        for extra in item.period[1:]:
+            self.d.add("E0209", extra.span, "`period` is given more than once", "repeated `period`")
+        if item.period:
+            c.declared_period_ns, c.period_span = item.period[0].nanos, item.period[0].span
         c.subordinates = self._names(item.subordinates, "subordinate")
         c.reads = self._names(item.reads, "read")
         c.writes = self._names(item.writes, "write")

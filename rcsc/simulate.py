@@ -144,6 +144,9 @@ class _StepEnv(Env):
             return st.fields[e.value]
         raise KeyError(e.attr)
 
+    def age(self, e: m.Age):
+        return (self.sim.cycle - self.sim.gm_stamp[e.name]) * self.sim.period_ns
+
     def call_extern(self, e: m.Call, args: list):
         impl = self.sim.externs.get(e.func)
         if impl is None:
@@ -167,6 +170,7 @@ class Simulator:
         self.externs = externs or {}
         self.cycle = 0
         self.gm = {n: clone(v.init) for n, v in design.gm.items()}
+        self.gm_stamp = {n: 0 for n in design.gm}  # cycle of the last write; 0: never written
         self.commands = {n: CommandBuffer() for n in design.controllers}
         self.statuses = {n: StatusBuffer(fields={k: clone(v.init) for k, v in c.status_fields.items()}) for n, c in design.controllers.items()}
         self.runtimes = {n: ControllerRuntime(c) for n, c in design.controllers.items()}
@@ -183,13 +187,15 @@ class Simulator:
 
     def set_input(self, name: str, value) -> None:
         self.gm[name] = clone(value)
+        self.gm_stamp[name] = max(self.cycle, 1)
 
     # ---- the cycle -------------------------------------------------------------
 
     def run_cycle(self) -> None:
         """Step every controller once, in schedule order (call after applying inputs)."""
         for c in self.schedule:
-            self.step(self.runtimes[c.name])
+            if (self.cycle - 1) % c.divider == 0:
+                self.step(self.runtimes[c.name])
 
     def begin_cycle(self) -> int:
         self.cycle += 1
@@ -234,6 +240,7 @@ class Simulator:
         for use in c.writes:
             v = rt.gm[use.name]
             self.gm[use.name] = v if type(v) is not dict else clone(v)
+            self.gm_stamp[use.name] = self.cycle
         for sub, (verb, args) in rt.pending.items():
             serial = next_serial(rt.last_sent[sub])
             rt.last_sent[sub] = serial

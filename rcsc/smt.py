@@ -298,11 +298,13 @@ class Encoder:
         if isinstance(t, EnumType):
             v = z3.Int(vname)
             return Input(key, name, t, v, [v], z3.And(v >= 0, v <= len(t.members) - 1), tuple(t.members))
-        if key[0] in ("in_state", "age"):
-            # A whole number of heartbeats (as the simulator counts them):
+        if key[0] in ("in_state", "age", "gm_age"):
+            # A whole number of periods (as the simulator counts them):
             # k * period with k in range, cheaper for the solver than a
-            # divisibility constraint.
-            period = self.period_ns or 1
+            # divisibility constraint.  `in_state` counts the controller's own
+            # steps; an age counts base ticks (the shortest heartbeat, which
+            # divides every release instant and deadline).
+            period = (self.period_ns if key[0] == "in_state" else self.design.base_tick_ns or self.period_ns) or 1
             k = z3.Int(vname + ".cycles")
             return Input(key, name, t, k * period if period != 1 else k, [k], z3.And(k >= 0, k <= I64_T.max // period))
         if isinstance(t, IntType) or t == DURATION:
@@ -394,6 +396,9 @@ class Encoder:
 
     def e_InState(self, e: m.InState, args):
         return self._input(("in_state",), "in_state", DURATION)
+
+    def e_Age(self, e: m.Age, args):
+        return self._input(("gm_age", e.name), f"age({e.name})", DURATION)
 
     def e_SubView(self, e: m.SubView, args):
         sub = self.design.controllers.get(e.sub)

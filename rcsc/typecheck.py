@@ -277,6 +277,36 @@ class Checker:
             return m.Const(node.span, ERROR, 0)
         return m.Ref(node.span, p.type, "param", attr)
 
+    def _age(self, node: ast.Call) -> m.Expr:
+        """`age(V)` of a Global Memory variable the controller uses, or `age(SUB)` of a subordinate."""
+        c = self.s.controller
+        if c is None or self.s.const_only or self.s.fn_params is not None:
+            self.d.add("E0100", node.span, "`age` is only available in a controller", "outside a controller").with_note(
+                "the age of a buffer is measured by the controller that reads it"
+            )
+            return m.Const(node.span, ERROR, 0)
+        if len(node.args) != 1 or node.args[0].name is not None or not isinstance(node.args[0].value, ast.Name):
+            self.d.add("E0201", node.span, "`age` takes one argument: a Global Memory variable or a subordinate", "one name").with_help(
+                "write `age(speed)` or `age(SUB)`"
+            )
+            return m.Const(node.span, ERROR, 0)
+        arg = node.args[0].value
+        n = arg.name
+        if n in self.g.controllers and n not in self.g.gm:
+            view = self._sub_view(ast.Attr(node.span, arg, ast.Ident(arg.span, "age")), n, "age")
+            return view
+        if n in self.g.gm:
+            if any(u.name == n for u in c.reads) or any(u.name == n for u in c.writes):
+                return m.Age(node.span, DURATION, n)
+            self.d.add("E0100", arg.span, f"`{n}` is not in the `reads` of `{c.name}`", "not declared as read").with_help(
+                f"add `reads {n}` to controller `{c.name}`"
+            )
+            return m.Const(node.span, ERROR, 0)
+        if n in self.g.poisoned:
+            return m.Const(node.span, ERROR, 0)
+        self.d.add("E0100", arg.span, f"`age` needs a Global Memory variable or a subordinate; `{n}` is neither", "not a buffer")
+        return m.Const(node.span, ERROR, 0)
+
     def _sub_view(self, node: ast.Attr, sub: str, attr: str) -> m.Expr:
         c = self.s.controller
         assert c is not None
@@ -403,6 +433,8 @@ class Checker:
             if args is None:
                 return m.Const(node.span, ERROR, 0)
             return self.fold(m.Call(node.span, F64, "builtin", name, args))
+        if name == "age" and name not in self.g.functions and not self._is_variable(name):
+            return self._age(node)
         if name in BUILTIN_FUNCS and name not in self.g.functions:
             count = BUILTIN_FUNCS[name]
             params = [("x", None)] if count == 1 else [("a", None), ("b", None)]

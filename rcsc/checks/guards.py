@@ -239,6 +239,8 @@ def _ekey(e: m.Expr):
         return ("t",)
     if t is m.SubView:
         return ("s", e.sub, e.attr, e.value)
+    if t is m.Age:
+        return ("age", e.name)
     if t is m.Field:
         return ("f", _ekey(e.obj), e.name)
     if t is m.Call:
@@ -329,8 +331,7 @@ class _Analysis:
         self.design, self.c, self.plan, self.opts, self.st = design, c, plan, opts, st
         self.assigned = assigned
         verb = c.verbs.get(plan.verb)
-        cpu = design.cpus.get(c.cpu) if c.cpu else None
-        self.period = cpu.heartbeat_ns if cpu is not None else None
+        self.period = c.period_ns or None
         self.enc = Encoder(design, c, verb, self.period)
         self.guarded = [r for r in plan.rules if r.guard is not None]
         self.encs: dict[int, Encoding] = {}
@@ -839,6 +840,8 @@ class _Canon:
             if e.attr == "field":
                 return ("v", self.key_of(("subfield", e.sub, e.value)))
             return ("v", self.key_of((e.attr, e.sub)))
+        if t is m.Age:
+            return ("v", self.key_of(("gm_age", e.name)))
         if t is m.Field:
             return ("f", self.expr(e.obj), e.name)
         if t is m.Call:
@@ -866,11 +869,13 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
     if plan.verb not in c.verbs:
         return
     lit_dead = literal_dead_rules(plan)
-    cpu = design.cpus.get(c.cpu) if c.cpu else None
-    period = cpu.heartbeat_ns if cpu is not None else None
+    period = c.period_ns or None
     canon = None
     if opts.cache:
-        canon = _Canon(design, c, plan, assigned, period)
+        # Ages count base ticks: a design whose base tick differs from this
+        # controller's period analyses the same plan differently.
+        unit = period if design.base_tick_ns in (0, period) else (period, design.base_tick_ns)
+        canon = _Canon(design, c, plan, assigned, unit)
         ckey = canon.key()
         hit = cache.get(ckey)
         if hit is not None:

@@ -1,10 +1,13 @@
 """Timing checks (paper sections 3.8.6 and 3.9).
 
-Every controller runs on exactly one CPU; per CPU the sum of the budgets of
-its controllers plus its overhead fits in the heartbeat; durations used by a
-controller are whole multiples of its CPU's heartbeat (else they round up);
-CPUs that exchange data have harmonic periods.  `budget_table` is the table
-that `rcsc budget` and the notes print.
+Every controller runs on exactly one CPU, every `divider`-th cycle of it
+(`period D`, a whole multiple of the heartbeat); per CPU and per cycle the
+budgets of the controllers due in that cycle plus the overhead fit in the
+heartbeat (the frame rule, see `rcsc.checks.frames`); durations used by a
+controller are whole multiples of its own period (else they round up); all
+heartbeats are harmonic.  The check records each controller's CPU, divider
+and period, and the design's crossing buffers (`Design.crossings`), for the
+simulator and the backends.
 """
 
 from __future__ import annotations
@@ -73,6 +76,8 @@ def check(design: Design, diags: Diagnostics) -> None:
                 f"add `{c.name}` to a `schedule`"
             )
 
+    _check_periods(design, diags)
+
     for cpu in design.cpus.values():
         if cpu.heartbeat_ns <= 0:
             continue
@@ -89,19 +94,73 @@ def check(design: Design, diags: Diagnostics) -> None:
             diag.with_note(f"budgets: {rows}" + (f", overhead {fmt_ns(cpu.overhead_ns)}" if cpu.overhead_ns else ""))
 
     for c in design.controllers.values():
-        if c.cpu is None:
+        period = c.period_ns
+        if c.cpu is None or period <= 0:
             continue
-        period = design.cpus[c.cpu].heartbeat_ns
-        if period <= 0:
-            continue
+        steps = "cycles" if c.divider == 1 else "steps"
         for span, ns in _durations(c):
             if ns % period:
                 cycles = -(-ns // period)
-                diags.add("W0601", span, f"{fmt_ns(ns)} is not a whole number of {fmt_ns(period)} cycles", f"rounds up to {cycles} cycles").with_help(
+                diags.add("W0601", span, f"{fmt_ns(ns)} is not a whole number of {fmt_ns(period)} {steps}", f"rounds up to {cycles} {steps}").with_help(
                     f"write `{fmt_ns(cycles * period)}` to say what happens"
                 )
 
     _check_harmonic(design, diags)
+    design.crossings = crossings(design)
+
+
+def _check_periods(design: Design, diags: Diagnostics) -> None:
+    """Each placed controller's divider and period: `period D` over its CPU's heartbeat."""
+    for c in design.controllers.values():
+        if c.cpu is None:
+            continue
+        hb = design.cpus[c.cpu].heartbeat_ns
+        c.divider, c.period_ns = 1, max(hb, 0)
+        if not c.declared_period_ns or hb <= 0:
+            continue
+        if c.declared_period_ns % hb:
+            span = c.period_span or c.name_span
+            diag = diags.add(
+                "E0607",
+                span,
+                f"the period of `{c.name}` ({fmt_ns(c.declared_period_ns)}) is not a whole number of `{c.cpu}` cycles ({fmt_ns(hb)})",
+                "not a multiple of the heartbeat",
+            )
+            lower = c.declared_period_ns // hb * hb
+            options = [fmt_ns(x) for x in (lower, lower + hb) if x > 0]
+            diag.with_help("write " + " or ".join(f"`period {x}`" for x in options))
+            continue
+        c.divider = c.declared_period_ns // hb
+        c.period_ns = c.declared_period_ns
+
+
+def crossings(design: Design) -> list[m.Crossing]:
+    """The buffers that travel between CPUs, in the order the model documents."""
+    ctrls = design.controllers
+    out: list[m.Crossing] = []
+    writer_cpu: dict[str, str] = {}
+    for c in ctrls.values():
+        for use in c.writes:
+            if c.cpu:
+                writer_cpu.setdefault(use.name, c.cpu)
+    for name in design.gm:
+        w = writer_cpu.get(name)
+        if w is None:
+            continue
+        readers = {c.cpu for c in ctrls.values() if c.cpu and c.cpu != w and any(u.name == name for u in c.reads)}
+        if readers:
+            out.append(m.Crossing("gm", name, w, _in_cpu_order(design, readers)))
+    for c in ctrls.values():
+        sup = ctrls.get(c.supervisor) if c.supervisor else None
+        if sup is None or not sup.cpu or not c.cpu or sup.cpu == c.cpu:
+            continue
+        out.append(m.Crossing("cmd", c.name, sup.cpu, [c.cpu]))
+        out.append(m.Crossing("status", c.name, c.cpu, [sup.cpu]))
+    return out
+
+
+def _in_cpu_order(design: Design, names: set[str]) -> list[str]:
+    return [n for n in design.cpus if n in names]
 
 
 def _durations(c: m.Controller):
@@ -122,6 +181,11 @@ def _durations(c: m.Controller):
 
 
 def _check_harmonic(design: Design, diags: Diagnostics) -> None:
+    """Every pair of heartbeats is harmonic: CPUs that exchange data first, then the rest.
+
+    All CPUs share one time base whose tick is the shortest heartbeat, so even
+    CPUs that exchange nothing must be harmonic for scenarios to address them.
+    """
     pairs: set[tuple[str, str]] = set()
     ctrls = design.controllers
     for c in ctrls.values():
@@ -148,3 +212,18 @@ def _check_harmonic(design: Design, diags: Diagnostics) -> None:
             cpu = design.cpus[b]
             diag = diags.add("E0602", cpu.heartbeat_span or cpu.name_span, f"cpus `{a}` and `{b}` exchange data but their periods are not harmonic", "not a multiple")
             diag.with_note(f"{fmt_ns(pa)} and {fmt_ns(pb)}: one must be a whole multiple of the other")
+    cpus = [c for c in design.cpus.values() if c.heartbeat_ns > 0]
+    reported = {name for pair in pairs for name in pair if _non_harmonic(design, *pair)}
+    for i, cb in enumerate(cpus):
+        if cb.name in reported:
+            continue
+        for ca in cpus[:i]:
+            if ca.name not in reported and _non_harmonic(design, ca.name, cb.name):
+                diag = diags.add("E0602", cb.heartbeat_span or cb.name_span, f"the heartbeats of cpus `{ca.name}` and `{cb.name}` are not harmonic", "not a multiple")
+                diag.with_note(f"{fmt_ns(ca.heartbeat_ns)} and {fmt_ns(cb.heartbeat_ns)}: one must be a whole multiple of the other (all CPUs share one time base)")
+                break
+
+
+def _non_harmonic(design: Design, a: str, b: str) -> bool:
+    lo, hi = sorted((design.cpus[a].heartbeat_ns, design.cpus[b].heartbeat_ns))
+    return lo > 0 and hi % lo != 0
