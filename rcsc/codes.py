@@ -359,12 +359,12 @@ design with several CPUs is checked, but simulating the buffer exchange between
 CPUs is not implemented yet.
 """),
     # ---- code generation ----------------------------------------------------
-    ("E0800", _E, "the target cannot build a design with several CPUs", """
-`rcsc build` generates one Main Program per CPU, but the buffers that
-controllers on different CPUs share would need a transport (shared memory,
-a network) to travel between them, and no target has one yet. Rather than
-emit code that silently loses those buffers, the build is refused. Put the
-design on one CPU to build it, or check it with `rcsc check` meanwhile.
+    ("E0800", _E, "the target cannot build this many CPUs", """
+`rcsc build` generates one Main Program per CPU; the CPUs' processes exchange
+the buffers that cross between them through shared memory, where each
+published sample records the CPUs that read it as one bit of a 64-bit word.
+A design with more than 64 CPUs is refused rather than built with readers
+that would never be waited for. Merge CPUs that share a heartbeat.
 """),
     ("E0801", _E, "the target does not implement divided rates or Global Memory ages yet", """
 `rcsc sim` and `rcsc test` run controllers with a `period` longer than their

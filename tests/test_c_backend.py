@@ -199,7 +199,7 @@ def test_console_pause_single_step_and_quit(builds: Builds) -> None:
     assert b"TURBINE_SIM" in con.out, "the timing table is printed on quit"
 
 
-def test_several_cpus_are_refused(tmp_path: Path, capsys) -> None:
+def test_more_than_64_cpus_are_refused(tmp_path: Path, capsys) -> None:
     from rcsc import cli
 
     design = ROOT / "tests/cases/E0800_several_cpus/main.rcs"

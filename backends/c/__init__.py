@@ -16,6 +16,7 @@ from rcsc.backend import (
     ordered_types,
     StateTest,
     expr_key,
+    keeps_gm_stamps,
     plan_layout,
     tests_state,
     built_controllers,
@@ -28,7 +29,7 @@ from rcsc.backends.c.target import CTarget, _strip_parens, c_comment
 from rcsc.simulate import zero_value
 from rcsc.types import EnumType, RecordType
 
-RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c")
+RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c", "rcs_shm.h", "rcs_shm.c")
 
 
 @register
@@ -56,7 +57,7 @@ class CBackend(CTarget):
             tables = main_tables(self, cpu, schedule_of(d, cpu, self.options), ctrls)
             files.append(OutFile(f"main_{cpu.name}.c", self.render("main.c.j2", p=p, cpu=cpu.name, deploy=deploy, ctrls=[c.name for c in ctrls], **tables)))
             binaries.append({"name": f"{p}_{cpu.name}", "main": f"main_{cpu.name}.c"})
-        sources = [f"{p}.c"] + [f"{p}_{c.name}.c" for c in ctrls] + ([f"{p}_externs.c"] if externs else []) + ([f"{p}_io.c"] if deploy else []) + ["rcs_runtime.c"]
+        sources = [f"{p}.c"] + [f"{p}_{c.name}.c" for c in ctrls] + ([f"{p}_externs.c"] if externs else []) + ([f"{p}_io.c"] if deploy else []) + ["rcs_runtime.c", "rcs_shm.c"]
         build = {"p": p, "sources": sources, "binaries": binaries}
         files.append(OutFile("Makefile", self.render("Makefile.j2", **build)))
         files.append(OutFile("CMakeLists.txt", self.render("CMakeLists.txt.j2", **build)))
@@ -95,6 +96,7 @@ class CBackend(CTarget):
         fns = [f for f in d.functions.values() if not f.extern]
         return {
             "p": p, "design": d.name,
+            "gm_stamps": [self.ident(n) for n in d.gm] if keeps_gm_stamps(d) else [],
             "periods": [{"macro": self.period_macro(c.name), "ns": c.heartbeat_ns} for c in d.cpus.values()],
             "types": types, "consts": consts, "gm": gm, "buffers": buffers,
             "protos": [f"static inline {self.prototype(f)};" for f in fns],
@@ -122,6 +124,8 @@ class CBackend(CTarget):
     def design_source(self, ctrls: list[m.Controller]) -> dict:
         d = self.design
         gm = [f"b->gm.{self.ident(n)} = {self.init_value(v)};" for n, v in d.gm.items()]
+        if keeps_gm_stamps(d):
+            gm += [f"b->gm_stamp.{self.ident(n)} = 0u;" for n in d.gm]
         inits = []
         for c in ctrls:
             member = self.ident(c.name)
@@ -158,6 +162,8 @@ class CBackend(CTarget):
             "rules": [{"name": f"RULE_{plan.verb}_{r.label}", "number": info.rule_number[(plan.verb, r.index)]} for plan in c.plans.values() for r in plan.rules],
             "plans": plans,
             "pre": self.stmts(c.pre, 1), "post": self.stmts(c.post, 1),
+            "tick": self.tick(),
+            "gm_stamps": [self.ident(u.name) for u in c.writes] if keeps_gm_stamps(self.design) else [],
         }
         self.info = None
         return ctx

@@ -18,7 +18,7 @@ import math
 import re
 
 from rcsc import model as m
-from rcsc.backend import BuildOptions, CtrlInfo, Target, expr_key, impure_functions, lower_controller
+from rcsc.backend import BuildOptions, CtrlInfo, Target, base_cpu, cpu_ticks, expr_key, impure_functions, lower_controller
 from rcsc.types import BOOL, DURATION, I32, I64, U32, EnumType, FloatType, IntType, RecordType, Type
 
 C_KEYWORDS = frozenset(
@@ -45,6 +45,7 @@ class CTarget(Target):
     name = "c"
     summary = "C99 controllers (freestanding) and a POSIX Main Program per CPU"
     package = "rcsc.backends.c"
+    multi_cpu = True
 
     def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
         super().__init__(design, options)
@@ -141,6 +142,19 @@ class CTarget(Target):
             return f"buf->{self.ident(self.info.c.name)}_cmd.args.{self.ident(self.verb)}.{name}"
         return name  # a function's parameter
 
+    def tick(self) -> str:
+        """The tick at which the current cycle of the controller's CPU is released (stamps count ticks)."""
+        assert self.info is not None
+        n = cpu_ticks(self.design, self.info.c.cpu or "")
+        return "cycle" if n == 1 else f"rcs_tick(cycle, {n}u)"
+
+    def age_of(self, stamp: str) -> str:
+        """The time since the tick `stamp`, in base ticks (the shortest heartbeat)."""
+        return f"rcs_cycles_ns({self.tick()}, {stamp}, {self.period_macro(base_cpu(self.design).name)})"
+
+    def age_expr(self, e: m.Age) -> str:
+        return self.age_of(f"buf->gm_stamp.{self.ident(e.name)}")
+
     def instate_expr(self, e: m.InState) -> str:
         assert self.info is not None
         return f"rcs_cycles_ns(cycle, self->entry_cycle, {self.period_macro(self.info.c.cpu or '')})"
@@ -157,7 +171,7 @@ class CTarget(Target):
         if e.attr == "error_code":
             return f"{status}.head.error_code"
         if e.attr == "age":
-            return f"rcs_cycles_ns(cycle, {status}.head.stamp, {self.period_macro(self.info.c.cpu or '')})"
+            return self.age_of(f"{status}.head.stamp")
         if e.attr == "field":
             return f"{status}.f.{self.ident(e.value or '')}"
         raise ValueError(e.attr)
