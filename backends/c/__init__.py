@@ -30,6 +30,7 @@ from rcsc.simulate import zero_value
 from rcsc.types import EnumType, RecordType
 
 RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c", "rcs_shm.h", "rcs_shm.c")
+LAUNCHER_FILES = ("rcs_launch.h", "rcs_launch.c")  # several CPUs only
 
 
 @register
@@ -58,7 +59,12 @@ class CBackend(CTarget):
             files.append(OutFile(f"main_{cpu.name}.c", self.render("main.c.j2", p=p, cpu=cpu.name, deploy=deploy, ctrls=[c.name for c in ctrls], **tables)))
             binaries.append({"name": f"{p}_{cpu.name}", "main": f"main_{cpu.name}.c"})
         sources = [f"{p}.c"] + [f"{p}_{c.name}.c" for c in ctrls] + ([f"{p}_externs.c"] if externs else []) + ([f"{p}_io.c"] if deploy else []) + ["rcs_runtime.c", "rcs_shm.c"]
-        build = {"p": p, "sources": sources, "binaries": binaries}
+        launcher = None
+        if len(d.cpus) > 1:
+            files += [OutFile(name, self.runtime_file(name)) for name in LAUNCHER_FILES]
+            files.append(OutFile(f"run_{p}.c", self.render("run.c.j2", p=p, cpus=", ".join(f'"{n}"' for n in d.cpus))))
+            launcher = {"name": f"run_{p}", "main": f"run_{p}.c", "objects": f"run_{p}.o rcs_launch.o"}
+        build = {"p": p, "sources": sources, "binaries": binaries, "launcher": launcher}
         files.append(OutFile("Makefile", self.render("Makefile.j2", **build)))
         files.append(OutFile("CMakeLists.txt", self.render("CMakeLists.txt.j2", **build)))
         return files
