@@ -25,7 +25,7 @@ seconds and steps per second:
 Each workload is timed twice: `run_scenario` (what `rcsc sim` and `rcsc
 test` do per cycle: apply inputs, step every controller, take the
 end-of-cycle snapshot; no trace output, no expectations) and the bare
-stepping loop (`Simulator.begin_cycle` + `run_cycle`).  Front-end time
+stepping loop (`System.tick`: `Simulator.begin_cycle` + `run_cycle`).  Front-end time
 (parse, sema, checks) is reported separately and is not part of steps/s.
 
 If the submarine run misses its goal (or with --profile), the hottest
@@ -52,7 +52,7 @@ from rcsc.diagnostics import Diagnostics  # noqa: E402
 from rcsc.driver import check_path  # noqa: E402
 from rcsc.runner import drive, run_scenario  # noqa: E402
 from rcsc.scenario import text_to_scenario  # noqa: E402
-from rcsc.simulate import Simulator  # noqa: E402
+from rcsc.timebase import System  # noqa: E402
 from rcsc.source import SourceFile  # noqa: E402
 
 SUBMARINE = ROOT / "examples" / "submarine" / "submarine.rcs"
@@ -102,7 +102,7 @@ def _load(path: str):
 
 def _bare_steps(design, sc) -> float:
     """The stepping loop alone: inputs and commands applied, no snapshots."""
-    sim = Simulator(design)
+    sim = System(design)
     t = time.perf_counter()
     for _ in drive(sim, sc):
         pass

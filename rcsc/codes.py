@@ -353,11 +353,6 @@ must be a whole multiple n of the CPU's heartbeat (n >= 1). A controller with
 `period 50 ms` on a 20 ms CPU would have no fixed place in the cycle; choose a
 multiple (40 ms, 60 ms) or move it to a CPU whose heartbeat divides 50 ms.
 """),
-    ("E0606", _E, "the simulator runs single-CPU designs", """
-The reference simulator (`rcsc sim`, `rcsc test`) steps one CPU's schedule. A
-design with several CPUs is checked, but simulating the buffer exchange between
-CPUs is not implemented yet.
-"""),
     # ---- code generation ----------------------------------------------------
     ("E0800", _E, "the target cannot build this many CPUs", """
 `rcsc build` generates one Main Program per CPU; the CPUs' processes exchange

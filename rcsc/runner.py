@@ -1,8 +1,12 @@
 """Running a scenario against a design: the simulator plus expectations (`run_scenario`).
 
-The scenario's commands and inputs for cycle N are applied at the start of
-cycle N, before any controller steps; expectations are evaluated on the state
-at the end of a cycle (after every controller of the schedule has written).
+A scenario counts base ticks (the shortest heartbeat; on a single-CPU design
+its cycles).  The scenario's inputs, commands and faults of tick N happen at
+instant (N-1) * base tick and are seen by each CPU at its first release at or
+after it; expectations of tick N are evaluated after every CPU released at
+that instant has run its cycle, on each buffer as its writer last wrote it
+(every controller's own status buffer, each Global Memory variable on its
+writer's CPU, inputs as the scenario last set them).
 """
 
 from __future__ import annotations
@@ -12,8 +16,8 @@ from dataclasses import dataclass, field
 from rcsc import model as m
 from rcsc.evaluate import Env, eval_expr
 from rcsc.scenario import Expectation, Observed, Scenario
-from rcsc.simulate import Simulator
-from rcsc.trace import Snapshot, json_value, snapshot
+from rcsc.timebase import Event, System
+from rcsc.trace import CpuSnapshot, Snapshot, cpu_snapshot, json_value, observed_snapshot, snapshot
 from rcsc.types import Type
 
 
@@ -65,8 +69,9 @@ class ExpectResult:
 @dataclass
 class RunResult:
     scenario: Scenario
-    snapshots: list[Snapshot]
+    snapshots: list[Snapshot]  # one per tick: what expectations see
     results: list[ExpectResult]
+    cpu_cycles: list[CpuSnapshot] = field(default_factory=list)  # multi-CPU designs: one per CPU cycle run
 
     @property
     def passed(self) -> bool:
@@ -128,24 +133,48 @@ def evaluate_expectation(design: m.Design, x: Expectation, snaps: list[Snapshot]
     return ExpectResult(x, True, snaps[-1].cycle, [])
 
 
-def drive(sim: Simulator, sc: Scenario):
-    """Run `sc`'s cycles on `sim`, yielding after each cycle (inputs and commands applied first)."""
-    commands = list(sc.commands)
-    inputs = list(sc.inputs)
-    for _ in range(sc.cycles):
-        cycle = sim.begin_cycle()
-        while inputs and inputs[0].cycle == cycle:
-            inp = inputs.pop(0)
-            sim.set_input(inp.var, inp.value)
-        while commands and commands[0].cycle == cycle:
-            cmd = commands.pop(0)
-            sim.operator_command(cmd.ctrl, cmd.verb, cmd.args)
-        sim.run_cycle()
-        yield cycle
+def events_at(sc: Scenario, tick: int, instant: int):
+    """The outside events of tick `tick`: inputs, then commands, then faults (file order within each)."""
+    for inp in sc.inputs:
+        if inp.cycle == tick:
+            yield Event(instant, "input", inp.var, inp.value)
+    for cmd in sc.commands:
+        if cmd.cycle == tick:
+            yield Event(instant, "command", cmd.ctrl, (cmd.verb, cmd.args))
+    for f in sc.faults:
+        if f.cycle == tick:
+            yield Event(instant, f.kind, f.name)
+
+
+def drive(system: System, sc: Scenario):
+    """Run `sc`'s ticks on `system`, yielding each tick after it ran (its events posted first)."""
+    by_tick: dict[int, list] = {}
+    for tick in range(1, sc.cycles + 1):
+        by_tick[tick] = []
+    for tick in sorted({x.cycle for x in [*sc.inputs, *sc.commands, *sc.faults]}):
+        by_tick[tick] = list(events_at(sc, tick, (tick - 1) * system.base_ns))
+    for tick in range(1, sc.cycles + 1):
+        for ev in by_tick[tick]:
+            system.post(ev)
+        system.tick()
+        yield tick
+
+
+def observe(system: System) -> Snapshot:
+    """What an expectation at the current tick sees: each buffer as its writer last wrote it."""
+    if len(system.cpus) == 1:
+        return snapshot(next(iter(system.cpus.values())))
+    return observed_snapshot(system)
 
 
 def run_scenario(design: m.Design, sc: Scenario, externs: dict | None = None) -> RunResult:
-    sim = Simulator(design, externs)
-    snaps = [snapshot(sim) for _ in drive(sim, sc)]
+    system = System(design, externs)
+    snaps: list[Snapshot] = []
+    cycles: list[CpuSnapshot] = []
+    multi = len(system.cpus) > 1
+    for _ in drive(system, sc):
+        snaps.append(observe(system))
+        if multi:
+            cycles.extend(cpu_snapshot(system, cpu) for cpu, _ in system.ran)
     results = [evaluate_expectation(design, x, snaps) for x in sc.expects]
-    return RunResult(sc, snaps, results)
+    return RunResult(sc, snaps, results, cycles)

@@ -2,10 +2,20 @@
 
 It implements DESIGN.md section 3 over the checked design model, and every
 backend is compared against it byte for byte (through the trace, see
-`rcsc.trace`).  One cycle: increment the cycle counter, apply the scenario's
-operator commands and environment inputs, step each controller in schedule
-order, then record a snapshot.  One controller step: read, pre, new-command
-check, decide, post, write (see `Simulator.step`).
+`rcsc.trace`).  A `Simulator` runs the cycles of one CPU: increment the cycle
+counter, apply the scenario's operator commands and environment inputs, step
+each controller of the schedule that is due in this cycle (every `divider`-th
+cycle, from cycle 1), then record a snapshot.  One controller step: read,
+pre, new-command check, decide, post, write (see `Simulator.step`).  Several
+CPUs on one time base, with the buffers that cross between them, are run by
+`rcsc.timebase`.
+
+Time is measured in nanoseconds from the release of the first cycle: cycle k
+of a CPU with heartbeat P is released at (k-1)*P.  Every buffer carries the
+stamp of the instant its value became visible (the release instant of the
+writer's step on the same CPU); `age` is the reader's release instant minus
+that stamp, and a buffer nobody has written has the stamp of one base tick
+before time 0.
 
 Buffers follow the paper's triple buffering: each controller reads copies of
 its command, its subordinates' status and its Global Memory at the start of
@@ -76,7 +86,7 @@ class StatusBuffer:
     state: str = ""
     rule: str = ""
     error_code: int = 0
-    stamp: int = 0  # cycle of the write
+    stamp: int = 0  # instant (ns) the value became visible to the reader
     verb: str = ""
     fields: dict = field(default_factory=dict)
 
@@ -96,7 +106,7 @@ class ControllerRuntime:
         self.pending: dict[str, tuple[str, dict]] = {}
         self.plan: m.Plan | None = None
         self.idle = True
-        self.entry_cycle = 0
+        self.entry_ns = 0  # release instant of the step that entered the current state
         self.steps = 0
         self.gm_uses = c.reads + c.writes
 
@@ -121,7 +131,7 @@ class _StepEnv(Env):
         raise KeyError(e.name)
 
     def in_state(self, e: m.InState):
-        return (self.sim.cycle - self.rt.entry_cycle) * self.sim.period_ns
+        return self.sim.now - self.rt.entry_ns
 
     def sub_view(self, e: m.SubView):
         rt = self.rt
@@ -139,13 +149,13 @@ class _StepEnv(Env):
         if e.attr == "error_code":
             return st.error_code
         if e.attr == "age":
-            return (self.sim.cycle - st.stamp) * self.sim.period_ns
+            return self.sim.now - st.stamp
         if e.attr == "field":
             return st.fields[e.value]
         raise KeyError(e.attr)
 
     def age(self, e: m.Age):
-        return (self.sim.cycle - self.sim.gm_stamp[e.name]) * self.sim.period_ns
+        return self.sim.now - self.sim.gm_stamp[e.name]
 
     def call_extern(self, e: m.Call, args: list):
         impl = self.sim.externs.get(e.func)
@@ -158,24 +168,35 @@ class _StepEnv(Env):
 
 
 class Simulator:
-    """Runs a single-CPU design cycle by cycle."""
+    """Runs one CPU cycle by cycle: the design's only CPU, or `cpu` of a multi-CPU design.
 
-    def __init__(self, design: m.Design, externs: dict | None = None) -> None:
+    It keeps a copy of every buffer of the design (Global Memory, command and
+    status buffers); on a multi-CPU design `rcsc.timebase` refreshes the
+    copies of the buffers that other CPUs write.
+    """
+
+    def __init__(self, design: m.Design, externs: dict | None = None, cpu: m.Cpu | None = None) -> None:
         self.design = design
-        cpus = list(design.cpus.values())
-        if len(cpus) != 1:
-            raise ValueError("the reference simulator runs single-CPU designs")
-        self.cpu = cpus[0]
-        self.period_ns = self.cpu.heartbeat_ns
+        if cpu is None:
+            cpus = list(design.cpus.values())
+            if len(cpus) != 1:
+                raise ValueError("name the CPU to simulate: the design has several")
+            cpu = cpus[0]
+        self.cpu = cpu
+        self.period_ns = cpu.heartbeat_ns
         self.externs = externs or {}
         self.cycle = 0
+        never = -(design.base_tick_ns or self.period_ns)  # the stamp of a buffer nobody has written
         self.gm = {n: clone(v.init) for n, v in design.gm.items()}
-        self.gm_stamp = {n: 0 for n in design.gm}  # cycle of the last write; 0: never written
+        self.gm_stamp = {n: never for n in design.gm}
         self.commands = {n: CommandBuffer() for n in design.controllers}
-        self.statuses = {n: StatusBuffer(fields={k: clone(v.init) for k, v in c.status_fields.items()}) for n, c in design.controllers.items()}
+        self.statuses = {
+            n: StatusBuffer(stamp=never, fields={k: clone(v.init) for k, v in c.status_fields.items()}) for n, c in design.controllers.items()
+        }
         self.runtimes = {n: ControllerRuntime(c) for n, c in design.controllers.items()}
-        self.schedule = [design.controllers[u.name] for u in self.cpu.schedule]
-        self.operator_serial: dict[str, int] = {}
+        self.schedule = [design.controllers[u.name] for u in cpu.schedule]
+        self.frozen: set[str] = set()  # controllers a scenario froze: never stepped again
+        self.now = -self.period_ns  # the release instant of the current cycle, in ns
 
     # ---- outside world ---------------------------------------------------------
 
@@ -185,20 +206,22 @@ class Simulator:
         self.commands[ctrl] = CommandBuffer(serial, verb, dict(args))
         return serial
 
-    def set_input(self, name: str, value) -> None:
+    def set_input(self, name: str, value, stamp: int | None = None) -> None:
+        """An environment input; its stamp is the instant of the input (default: this release)."""
         self.gm[name] = clone(value)
-        self.gm_stamp[name] = max(self.cycle, 1)
+        self.gm_stamp[name] = self.now if stamp is None else stamp
 
     # ---- the cycle -------------------------------------------------------------
 
     def run_cycle(self) -> None:
-        """Step every controller once, in schedule order (call after applying inputs)."""
+        """Step the controllers due in this cycle, in schedule order (call after applying inputs)."""
         for c in self.schedule:
-            if (self.cycle - 1) % c.divider == 0:
+            if (self.cycle - 1) % c.divider == 0 and c.name not in self.frozen:
                 self.step(self.runtimes[c.name])
 
     def begin_cycle(self) -> int:
         self.cycle += 1
+        self.now = (self.cycle - 1) * self.period_ns
         return self.cycle
 
     def step(self, rt: ControllerRuntime) -> None:
@@ -222,7 +245,7 @@ class Simulator:
             st.error_code = 0
             st.rule = ""
             st.verb = rt.cmd.verb
-            rt.entry_cycle = self.cycle
+            rt.entry_ns = self.now
             rt.plan = c.plans.get(rt.cmd.verb)
             rt.idle = rt.plan is None
             if rt.plan is None:
@@ -235,12 +258,13 @@ class Simulator:
         # 5. Post.
         self.exec_block(c.post, rt, env)
         # 6. Write.
-        st.stamp = self.cycle
+        now = self.now
+        st.stamp = now
         self.statuses[c.name] = _clone_status(st)
         for use in c.writes:
             v = rt.gm[use.name]
             self.gm[use.name] = v if type(v) is not dict else clone(v)
-            self.gm_stamp[use.name] = self.cycle
+            self.gm_stamp[use.name] = now
         for sub, (verb, args) in rt.pending.items():
             serial = next_serial(rt.last_sent[sub])
             rt.last_sent[sub] = serial
@@ -275,7 +299,7 @@ class Simulator:
         nxt = rule.next
         if nxt.kind == "named" and nxt.name != st.state:
             st.state = nxt.name or ""
-            rt.entry_cycle = self.cycle
+            rt.entry_ns = self.now
         elif nxt.kind == "done":
             st.status = m.DONE
             st.state = "done"

@@ -20,9 +20,13 @@ import csv
 import io
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from rcsc import model as m
 from rcsc.simulate import Simulator
+
+if TYPE_CHECKING:
+    from rcsc.timebase import System
 from rcsc.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type
 
 
@@ -45,12 +49,7 @@ class Snapshot:
 
 
 def snapshot(sim: Simulator) -> Snapshot:
-    ctrls = {}
-    for name in sim.design.controllers:
-        st = sim.statuses[name]
-        ctrls[name] = CtrlSnapshot(
-            st.echo_serial, sim.status_name(name, st.status), st.verb, st.state, st.rule, st.error_code, dict(st.fields)
-        )
+    ctrls = {name: _ctrl_snapshot(sim, name, sim.statuses[name]) for name in sim.design.controllers}
     return Snapshot(sim.cycle, dict(sim.gm), ctrls)
 
 
@@ -90,21 +89,84 @@ def json_value(value, t: Type) -> str:
     return _json_str(str(value))
 
 
-def jsonl_line(design: m.Design, snap: Snapshot) -> str:
-    gm = ",".join(f"{_json_str(n)}:{json_value(snap.gm[n], v.type)}" for n, v in design.gm.items())
+def _gm_json(design: m.Design, gm: dict, names) -> str:
+    return ",".join(f"{_json_str(n)}:{json_value(gm[n], design.gm[n].type)}" for n in names)
+
+
+def _ctrl_json(design: m.Design, ctrl: dict, names) -> str:
     parts = []
-    for name, c in design.controllers.items():
-        s = snap.ctrl[name]
+    for name in names:
+        c = design.controllers[name]
+        s = ctrl[name]
         fields = ",".join(f"{_json_str(n)}:{json_value(s.fields[n], v.type)}" for n, v in c.status_fields.items())
         parts.append(
             f"{_json_str(name)}:{{\"echo\":{s.echo},\"status\":{_json_str(s.status)},\"verb\":{_json_str(s.verb)},"
             f"\"state\":{_json_str(s.state)},\"rule\":{_json_str(s.rule)},\"error_code\":{s.error_code},\"fields\":{{{fields}}}}}"
         )
-    return f"{{\"cycle\":{snap.cycle},\"gm\":{{{gm}}},\"ctrl\":{{{','.join(parts)}}}}}"
+    return ",".join(parts)
+
+
+def jsonl_line(design: m.Design, snap: Snapshot) -> str:
+    gm = _gm_json(design, snap.gm, design.gm)
+    return f"{{\"cycle\":{snap.cycle},\"gm\":{{{gm}}},\"ctrl\":{{{_ctrl_json(design, snap.ctrl, design.controllers)}}}}}"
 
 
 def to_jsonl(design: m.Design, snaps: list[Snapshot]) -> str:
     return "".join(jsonl_line(design, s) + "\n" for s in snaps)
+
+
+# ---- several CPUs ------------------------------------------------------------------
+
+
+@dataclass
+class CpuSnapshot:
+    """One cycle of one CPU of a multi-CPU design: that CPU's view after the cycle."""
+
+    cpu: str
+    cycle: int
+    t: int  # the cycle's release instant, in ns
+    gm: dict  # the GM variables the CPU's controllers read or write (its copies)
+    ctrl: dict  # the controllers placed on the CPU
+
+
+def cpu_gm_names(design: m.Design, cpu: str) -> list[str]:
+    """The GM variables that the controllers of `cpu` read or write, in declaration order."""
+    used = {u.name for c in design.controllers.values() if c.cpu == cpu for u in c.reads + c.writes}
+    return [n for n in design.gm if n in used]
+
+
+def _ctrl_snapshot(sim: Simulator, name: str, st) -> CtrlSnapshot:
+    return CtrlSnapshot(st.echo_serial, sim.status_name(name, st.status), st.verb, st.state, st.rule, st.error_code, dict(st.fields))
+
+
+def cpu_snapshot(system: "System", cpu: str) -> CpuSnapshot:
+    sim = system.cpus[cpu]
+    d = system.design
+    gm = {n: sim.gm[n] for n in cpu_gm_names(d, cpu)}
+    ctrl = {n: _ctrl_snapshot(sim, n, sim.statuses[n]) for n, c in d.controllers.items() if c.cpu == cpu}
+    return CpuSnapshot(cpu, sim.cycle, sim.now, gm, ctrl)
+
+
+def observed_snapshot(system: "System") -> Snapshot:
+    """The observer's view of a multi-CPU design at the current tick (see `rcsc.runner`)."""
+    first = next(iter(system.cpus.values()))
+    ctrls = {n: _ctrl_snapshot(first, n, system.observed_status(n)) for n in system.design.controllers}
+    return Snapshot(system.tick_count, system.observed_gm(), ctrls)
+
+
+def cpu_jsonl_line(design: m.Design, snap: CpuSnapshot) -> str:
+    gm = _gm_json(design, snap.gm, snap.gm)
+    return (
+        f"{{\"cpu\":{_json_str(snap.cpu)},\"cycle\":{snap.cycle},\"t\":{snap.t},"
+        f"\"gm\":{{{gm}}},\"ctrl\":{{{_ctrl_json(design, snap.ctrl, snap.ctrl)}}}}}"
+    )
+
+
+def cycles_to_jsonl(design: m.Design, snaps: list[CpuSnapshot]) -> str:
+    """The multi-CPU trace: one line per CPU cycle, by release instant, then CPU declaration order."""
+    order = {name: i for i, name in enumerate(design.cpus)}
+    ordered = sorted(snaps, key=lambda s: (s.t, order[s.cpu]))
+    return "".join(cpu_jsonl_line(design, s) + "\n" for s in ordered)
 
 
 # ---- flat columns: CSV and VCD ---------------------------------------------------

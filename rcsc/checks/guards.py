@@ -1051,6 +1051,8 @@ def _name_type(design: Design, c: m.Controller, plan: m.Plan, key: tuple) -> tup
         return f"{key[1]}.error_code", I32
     if kind == "age":
         return f"{key[1]}.age", DURATION
+    if kind == "gm_age":
+        return f"age({key[1]})", DURATION
     if kind == "subfield":
         var = design.controllers[key[1]].status_fields[key[2]]
         return ".".join(key[1:]), _leaf_type(var.type, key[3:])
@@ -1092,6 +1094,8 @@ def witness_keys(design: Design, controller: str, plan_verb: str, witness: dict)
         parts = tuple(name.split("."))
         if name == "in_state":
             key = ("in_state",)
+        elif name.startswith("age(") and name.endswith(")"):
+            key = ("gm_age", name[4:-1])
         elif parts[0] == "cmd":
             key = ("param",) + parts[1:]
         elif parts[0] in subs:
@@ -1156,7 +1160,7 @@ def apply_witness(sim, controller: str, plan: m.Plan, state: str, values: dict[t
     """Put `sim`'s runtime of `controller` into `state` of `plan` with the witness's inputs.
 
     `sim` is a `rcsc.simulate.Simulator` (or anything with its `design`,
-    `cycle`, `period_ns` and `externs`).  Returns the `_StepEnv` to pass to
+    `cycle`, `now`, `period_ns` and `externs`).  Returns the `_StepEnv` to pass to
     `Simulator.select_rule(plan, state, env)`.  Inputs the witness does not
     name keep their initial values.
     """
@@ -1177,14 +1181,15 @@ def apply_witness(sim, controller: str, plan: m.Plan, state: str, values: dict[t
         sc = design.controllers[u.name]
         rt.subs[u.name] = StatusBuffer(fields={k: clone(v.init) for k, v in sc.status_fields.items()})
         rt.last_sent[u.name] = 0
-    period = sim.period_ns or 1
     in_state, ages = 0, {}
     for key, value in values.items():
         kind = key[0]
         if kind == "in_state":
-            in_state = int(value) // period  # type: ignore[call-overload]
+            in_state = int(value)  # type: ignore[call-overload]
         elif kind == "age":
-            ages[key[1]] = int(value) // period  # type: ignore[call-overload]
+            ages[("sub", key[1])] = int(value)  # type: ignore[call-overload]
+        elif kind == "gm_age":
+            ages[("gm", key[1])] = int(value)  # type: ignore[call-overload]
         elif kind == "view":
             st = rt.subs[key[1]]
             if value == "none":
@@ -1207,10 +1212,20 @@ def apply_witness(sim, controller: str, plan: m.Plan, state: str, values: dict[t
             _store(rt.fields, key[1:], value)
         elif kind == "gm":
             _store(rt.gm, key[1:], value)
-    sim.cycle = 1 + max([in_state] + list(ages.values()))
-    rt.entry_cycle = sim.cycle - in_state
-    for sub, age in ages.items():
-        rt.subs[sub].stamp = sim.cycle - age
+    # Durations are in ns: the step happens late enough for every age and
+    # `in_state` of the witness (all whole periods, so the instants are real).
+    sim.now = max([in_state] + list(ages.values()))
+    period = getattr(sim, "period_ns", 0) or 1
+    sim.cycle = 1 + sim.now // period
+    rt.entry_ns = sim.now - in_state
+    gm_stamp = getattr(sim, "gm_stamp", None)
+    if gm_stamp is None:
+        gm_stamp = sim.gm_stamp = {}
+    for (what, name), age in ages.items():
+        if what == "sub":
+            rt.subs[name].stamp = sim.now - age
+        else:
+            gm_stamp[name] = sim.now - age
     return _StepEnv(sim, rt)
 
 
@@ -1229,7 +1244,7 @@ def _replays(design: Design, c: m.Controller, plan: m.Plan, f: _Finding) -> bool
     if f.state is None or not values and f.code != "W0517":
         return True
     cpu = design.cpus.get(c.cpu) if c.cpu else None
-    sim = SimpleNamespace(design=design, cycle=0, period_ns=cpu.heartbeat_ns if cpu else 1, externs=extern_table(f.externs))
+    sim = SimpleNamespace(design=design, cycle=0, now=0, period_ns=cpu.heartbeat_ns if cpu else 1, externs=extern_table(f.externs))
     try:
         env = apply_witness(sim, c.name, plan, f.state, values)
         fired = Simulator.select_rule(None, plan, f.state, env)  # type: ignore[arg-type]
