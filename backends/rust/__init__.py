@@ -23,7 +23,7 @@ from __future__ import annotations
 from importlib import resources
 
 from rcsc import model as m
-from rcsc.backend import OutFile, RuleStep, ordered_types, StateTest, built_controllers, expr_key, plan_layout, register, schedule_of, tests_state, where
+from rcsc.backend import OutFile, RuleStep, ordered_types, StateTest, built_controllers, expr_key, keeps_gm_stamps, plan_layout, register, schedule_of, tests_state, where
 from rcsc.backends.rust.fmt import Atom, Bin, Call, Node, Struct, arm, assign, expr_stmt, field_decl, fn_head, if_open, let, pad, tail
 from rcsc.backends.rust.target import RustTarget, rust_comment
 from rcsc.simulate import zero_value
@@ -65,7 +65,10 @@ class RustBackend(RustTarget):
         pure = [f for f in d.functions.values() if not f.extern]
         files: list[OutFile] = []
         ctrl_files = [OutFile(f"src/{self.module(c)}.rs", self.render("ctrl.rs.j2", **self.controller(c))) for c in ctrls]
-        files.append(OutFile("Cargo.toml", self.render("Cargo.toml.j2", crate=self.crate, design=d.name, cpus=[c.name for c in d.cpus.values()])))
+        launcher = f"run_{d.name}" if len(d.cpus) > 1 else None
+        files.append(OutFile("Cargo.toml", self.render("Cargo.toml.j2", crate=self.crate, design=d.name, cpus=[c.name for c in d.cpus.values()], launcher=launcher)))
+        if launcher:
+            files.append(OutFile("src/run.rs", self.render("run.rs.j2", design=d.name, cpus=", ".join(f'"{n}"' for n in d.cpus))))
         modules = ["num", "types"] + (["functions"] if pure else []) + [self.module(c) for c in ctrls] + (["externs_impl"] if externs else [])
         files.append(OutFile("src/lib.rs", self.render("lib.rs.j2", **self.lib(sorted(modules, key=_mod_key), externs))))
         files.append(OutFile("src/num.rs", self.runtime_text("num.rs")))
@@ -155,6 +158,7 @@ class RustBackend(RustTarget):
                   for k in d.consts.values()]
         gm_fields = [x for n, v in d.gm.items() for x in field_decl(f"pub {self.ident(n)}: {self.rtype(v.type)}", 1)]
         gm_init = assign("pub const INIT: Gm", "=", Struct("Gm", [(self.ident(n), self.init_value(v)) for n, v in d.gm.items()]), 1)
+        stamps = [x for n in d.gm for x in field_decl(f"pub {self.ident(n)}: u64", 1)] if keeps_gm_stamps(d) else []
         buffers = []
         for c in ctrls:
             info = self.infos[c.name]
@@ -180,13 +184,13 @@ class RustBackend(RustTarget):
                 "n_rules": len(info.rules),
                 "buffer_decls": field_decl(f"pub {c.name}_cmd: {c.name}_cmd", 1) + field_decl(f"pub {c.name}_status: {c.name}_status", 1),
             })
-        buf_new = tail(Struct("Buffers", [("gm", Atom("Gm::INIT"))] + [
+        buf_new = tail(Struct("Buffers", [("gm", Atom("Gm::INIT"))] + ([("gm_stamp", Call("Default::default"))] if stamps else []) + [
             x for c in ctrls for x in ((f"{c.name}_cmd", Call("Default::default")), (f"{c.name}_status", Atom(f"{c.name}_status::INIT")))
         ]), 2)
         return {
             "design": d.name,
             "periods": [{"const": self.period_const(c.name), "ns": c.heartbeat_ns, "cpu": c.name} for c in d.cpus.values()],
-            "types": types, "consts": consts, "gm_fields": gm_fields, "gm_init": gm_init,
+            "types": types, "consts": consts, "gm_fields": gm_fields, "gm_init": gm_init, "gm_stamps": stamps,
             "buffers": buffers, "buf_new": buf_new,
         }
 
@@ -267,7 +271,10 @@ class RustBackend(RustTarget):
             new_command += assign(f"{head}.status", "=", Atom("num::ERROR"), 3)
         new_command.append(f"{pad(2)}}}")
         # Write: the commands issued in this step become new with their serial.
-        write = assign(f"{head}.stamp", "=", Atom("cycle"), 2)
+        write = assign(f"{head}.stamp", "=", self.tick(), 2)
+        if keeps_gm_stamps(self.design):
+            for use in c.writes:
+                write += assign(f"buf.gm_stamp.{self.ident(use.name)}", "=", self.tick(), 2)
         for s in subs:
             sent = f"self.sent.{s['member']}"
             write += if_open(Atom(f"self.send.{s['member']}"), 2)

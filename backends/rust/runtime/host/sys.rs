@@ -457,6 +457,33 @@ mod seg {
         }
     }
 
+    const SIGTERM: c_int = 15;
+    const PR_SET_PDEATHSIG: c_int = 1;
+
+    unsafe extern "C" {
+        fn prctl(option: c_int, arg2: std::ffi::c_ulong, ...) -> c_int;
+    }
+
+    /// Asks process `pid` to stop (SIGTERM).
+    pub fn terminate(pid: u32) {
+        if let Ok(pid) = c_int::try_from(pid) {
+            // SAFETY: sends a signal; no memory is involved.
+            unsafe { kill(pid, SIGTERM) };
+        }
+    }
+
+    /// The child that `cmd` starts gets SIGTERM when the launcher dies.
+    pub fn die_with_parent(cmd: &mut std::process::Command) {
+        use std::os::unix::process::CommandExt;
+        // SAFETY: prctl is async-signal-safe and touches no memory of the parent.
+        unsafe {
+            cmd.pre_exec(|| {
+                prctl(PR_SET_PDEATHSIG, SIGTERM as std::ffi::c_ulong);
+                Ok(())
+            });
+        }
+    }
+
     /// Whether no process `pid` exists any more.
     pub fn process_gone(pid: u64) -> bool {
         let Ok(pid) = c_int::try_from(pid) else {
@@ -504,7 +531,11 @@ mod seg {
     pub fn monotonic_ns() -> u64 {
         0
     }
+
+    pub fn terminate(_pid: u32) {}
+
+    pub fn die_with_parent(_cmd: &mut std::process::Command) {}
 }
 
 pub use imp::{catch_stop_signals, realtime, Console};
-pub use seg::{monotonic_ns, process_gone, Segment};
+pub use seg::{die_with_parent, monotonic_ns, process_gone, terminate, Segment};
