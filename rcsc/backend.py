@@ -400,8 +400,9 @@ class Target:
                 )
                 d.with_note("the transport between the CPUs' processes keeps one bit per reading CPU in a 64-bit word")
             return
-        if len(self.design.cpus) > 1:
-            cpus = list(self.design.cpus.values())
+        # A target without a transport between CPUs, divided rates and stamps
+        # of Global Memory refuses what it would otherwise get wrong.
+        if len(cpus) > 1:
             d = diags.add(
                 "E0800",
                 cpus[1].name_span,
@@ -409,14 +410,11 @@ class Target:
                 "second CPU",
             )
             d.with_label(cpus[0].name_span, "first CPU")
-            d.with_note("exchanging buffers between CPUs needs a transport, which no target has yet")
         for c in self.design.controllers.values():
             if c.divider > 1:
-                d = diags.add("E0801", c.period_span or c.name_span, f"the {self.name} target steps every controller every cycle; `{c.name}` has a period", "divided rate")
-                d.with_note("`rcsc sim` and `rcsc test` run divided-rate controllers")
-        for c, age in _gm_ages(self.design):
-            d = diags.add("E0801", age.span, f"the {self.name} target does not keep Global Memory stamps for `age({age.name})`", "age of Global Memory")
-            d.with_note(f"in `{c.name}`; `rcsc sim` and `rcsc test` measure it")
+                diags.add("E0800", c.period_span or c.name_span, f"the {self.name} target steps every controller every cycle; `{c.name}` has a period", "divided rate")
+        for _, age in _gm_ages(self.design):
+            diags.add("E0800", age.span, f"the {self.name} target keeps no stamps of Global Memory for `age({age.name})`", "age of Global Memory")
 
     # ---- output --------------------------------------------------------------------
 

@@ -3,7 +3,7 @@
 `rcsc build` of a design with several CPUs gives one program per CPU and a
 launcher (`run_<design>`) that starts them all with one run id; they
 exchange the buffers that cross between CPUs through POSIX shared memory.
-Checked here, for C (gcc -O2 and clang under ASan/UBSan):
+Checked here, for C (gcc -O2 and clang under ASan/UBSan) and Rust (release):
 
 - with `--lockstep` (each CPU waits for the samples it reads) the launcher's
   merged trace equals `rcsc sim`'s byte for byte, on every multi-CPU design
@@ -141,6 +141,68 @@ def test_a_cpu_alone_says_it_needs_the_launcher(c_builds):
     assert leftovers("relay") == []
 
 
+@pytest.fixture(scope="module")
+def rust_builds(tmp_path_factory):
+    """design -> the cargo release folder with the CPUs' programs and the launcher."""
+    base = tmp_path_factory.mktemp("mc_rust")
+    cache: dict[Path, Path] = {}
+
+    def get(design: Path) -> Path:
+        if design not in cache:
+            crate = base / design.stem
+            generate(design, "rust", crate)
+            env = dict(os.environ, CARGO_TARGET_DIR=str(base / f"target-{design.stem}"), CARGO_TERM_COLOR="never")
+            for cmd in (["cargo", "build", "--offline", "--release"], ["cargo", "clippy", "--offline", "--release", "--", "-D", "warnings"]):
+                r = subprocess.run(cmd, cwd=crate, env=env, capture_output=True, text=True)
+                assert r.returncode == 0, r.stderr[-4000:]
+                assert not re.search(r"^warning", r.stderr, re.M), r.stderr[-4000:]
+            files = [str(p) for p in crate.rglob("*.rs") if "target" not in p.parts]
+            r = subprocess.run(["rustfmt", "--check", "--edition", "2021", *files], capture_output=True, text=True)
+            assert r.returncode == 0, r.stdout[-4000:]
+            cache[design] = base / f"target-{design.stem}" / "release"
+        return cache[design]
+
+    return get
+
+
+@pytest.mark.parametrize("case", CASES, ids=lambda c: f"{c[0].stem}/{c[1].stem}")
+def test_rust_lockstep_trace_equals_simulator(rust_builds, case, tmp_path):
+    design, scn = case
+    folder = rust_builds(design)
+    name = next(p.name for p in folder.glob("run_*") if "." not in p.name)[4:]
+    trace = tmp_path / "rust.jsonl"
+    r = launch(folder, name, "--lockstep", "--no-timing", "--scenario", str(scn), "--trace", str(trace))
+    assert r.returncode == 0, r.stderr
+    want = sim_trace(design, scn, tmp_path)
+    got = trace.read_bytes()
+    assert got == want, first_difference(got, want)
+
+
+def test_rust_crashed_cpu_stops_the_others(rust_builds):
+    folder = rust_builds(TWOCPU)
+    p, pids = _start(folder, "twocpu")
+    os.kill(pids["planner"], signal.SIGKILL)
+    _, err = p.communicate(timeout=30)
+    assert p.returncode == 1
+    assert "rcs: CPU planner was killed by signal 9" in err
+    assert "rcs: timing of twocpu on servo" in err
+    assert_gone(pids.values())
+    assert leftovers("twocpu") == []
+
+
+def test_rust_ctrl_c_stops_every_cpu_cleanly(rust_builds, tmp_path):
+    folder = rust_builds(TWOCPU)
+    trace = tmp_path / "t.jsonl"
+    p, pids = _start(folder, "twocpu", "--trace", str(trace))
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=30)
+    assert p.returncode == 0, err
+    assert sorted(re.findall(r"rcs: timing of twocpu on (\w+)", err)) == ["planner", "servo"]
+    assert_gone(pids.values())
+    assert leftovers("twocpu") == []
+    assert len(trace.read_text().splitlines()) > 10
+
+
 def _realtime_report(stderr: str) -> list[str]:
     """What the CPUs' timing tables say went wrong in a real-time run (empty: nothing)."""
     problems = []
@@ -222,3 +284,23 @@ def test_lockstep_reader_sees_a_crashed_writer(c_builds, tmp_path):
     _, err = servo.communicate(timeout=30)
     assert servo.returncode == 1 and "CPU planner failed or is gone" in err
     assert leftovers("twocpu") == []
+
+
+def test_a_target_without_a_transport_refuses_what_it_cannot_build():
+    """The default of `Target.check`: several CPUs, divided rates and ages of Global Memory are refused."""
+    from rcsc.backend import Target
+    from rcsc.diagnostics import Diagnostics
+    from rcsc.driver import check_path
+
+    class Plain(Target):
+        name = "plain"
+
+    result = check_path(str(RELAY))
+    assert result.model is not None
+    diags = Diagnostics()
+    Plain(result.model).check(diags)
+    messages = [d.message for d in diags.items]
+    assert all(d.code == "E0800" for d in diags.items)
+    assert messages[0] == "the plain target builds single-CPU designs; this design has 2 CPUs"
+    assert "`DIV` has a period" in messages[1]
+    assert [m for m in messages if "age(" in m] == [f"the plain target keeps no stamps of Global Memory for `age({v})`" for v in ("pos", "wind", "goal")]
