@@ -39,6 +39,8 @@ ROOT = Path(__file__).resolve().parent.parent
 MC = ROOT / "tests" / "mc"
 TWOCPU = ROOT / "tests" / "sim" / "multicpu.rcs"
 RELAY = MC / "relay.rcs"
+SINGLE = MC / "single.rcs"
+SINGLE_CASES = [(SINGLE, MC / "single_run.scn"), (SINGLE, MC / "single_faults.scn")]
 
 CASES = [
     (TWOCPU, MC / "twocpu_run.scn"),
@@ -284,6 +286,72 @@ def test_lockstep_reader_sees_a_crashed_writer(c_builds, tmp_path):
     _, err = servo.communicate(timeout=30)
     assert servo.returncode == 1 and "CPU planner failed or is gone" in err
     assert leftovers("twocpu") == []
+
+
+def _single_c(tmp_path_factory_base: Path, config: str) -> Path:
+    src = tmp_path_factory_base / "single-src"
+    if not src.exists():
+        generate(SINGLE, "c", src)
+    exe = tmp_path_factory_base / f"single-{config}"
+    if not exe.exists():
+        cc, cflags, ldflags = C_CONFIGS[config]
+        sources = sorted(str(p) for p in src.glob("*.c"))
+        r = subprocess.run([cc, "-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wshadow", "-Werror", "-ffp-contract=off", *cflags.split(), *ldflags.split(), "-o", str(exe), *sources], capture_output=True, text=True)
+        assert r.returncode == 0 and r.stderr == "", r.stderr
+    return exe
+
+
+@pytest.fixture(scope="module")
+def single_base(tmp_path_factory):
+    return tmp_path_factory.mktemp("single")
+
+
+def _run_single(exe: Path, scn: Path, trace: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([str(exe), "--fast", "--no-console", "--no-timing", "--scenario", str(scn), "--trace", str(trace)], capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
+
+
+@pytest.mark.parametrize("config", list(C_CONFIGS))
+@pytest.mark.parametrize("case", SINGLE_CASES, ids=lambda c: c[1].stem)
+def test_single_cpu_divided_rate_ages_and_freeze(single_base, case, config, tmp_path):
+    """One CPU: a `period` controller, age(V) of Global Memory and of a subordinate, `freeze`."""
+    design, scn = case
+    exe = _single_c(single_base, config)
+    r = _run_single(exe, scn, tmp_path / "c.jsonl")
+    assert r.returncode == 0, r.stderr
+    want = sim_trace(design, scn, tmp_path)
+    got = (tmp_path / "c.jsonl").read_bytes()
+    assert got == want, first_difference(got, want)
+
+
+def test_single_cpu_stop_ends_the_run(single_base, rust_single, tmp_path):
+    """`stop` of the only CPU at tick 30: the run ends after cycle 29, with the simulator's lines up to there."""
+    scn = MC / "single_stop.scn"
+    want = sim_trace(SINGLE, scn, tmp_path).splitlines(keepends=True)[:29]
+    for exe in (_single_c(single_base, "gcc-O2"), rust_single):
+        r = _run_single(exe, scn, tmp_path / "t.jsonl")
+        assert r.returncode == 0, r.stderr
+        got = (tmp_path / "t.jsonl").read_bytes().splitlines(keepends=True)
+        assert got == want
+
+
+@pytest.fixture(scope="module")
+def rust_single(single_base):
+    crate = single_base / "rust"
+    generate(SINGLE, "rust", crate)
+    env = dict(os.environ, CARGO_TARGET_DIR=str(single_base / "target"), CARGO_TERM_COLOR="never")
+    r = subprocess.run(["cargo", "build", "--offline", "--release"], cwd=crate, env=env, capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-4000:]
+    return single_base / "target" / "release" / "single_main"
+
+
+@pytest.mark.parametrize("case", SINGLE_CASES, ids=lambda c: c[1].stem)
+def test_rust_single_cpu_divided_rate_ages_and_freeze(rust_single, case, tmp_path):
+    design, scn = case
+    r = _run_single(rust_single, scn, tmp_path / "r.jsonl")
+    assert r.returncode == 0, r.stderr
+    want = sim_trace(design, scn, tmp_path)
+    got = (tmp_path / "r.jsonl").read_bytes()
+    assert got == want, first_difference(got, want)
 
 
 def test_a_target_without_a_transport_refuses_what_it_cannot_build():
