@@ -515,12 +515,7 @@ def write_files(files: list[OutFile], out_dir: str) -> WriteResult:
 def _gm_ages(design: m.Design):
     """(controller, `age(V)` node) for every age of a Global Memory variable, in source order."""
     for c in design.controllers.values():
-        exprs: list[m.Expr] = []
-        for stmts in [c.pre, c.post] + [r.jobs for p in c.plans.values() for r in p.rules]:
-            for s in m.walk_stmts(stmts):
-                exprs.extend(m.stmt_exprs(s))
-        exprs.extend(r.guard for p in c.plans.values() for r in p.rules if r.guard is not None)
-        for e in sorted(exprs, key=lambda x: x.span.start):
+        for e in sorted(m.controller_exprs(c), key=lambda x: x.span.start):
             for x in m.walk_expr(e):
                 if isinstance(x, m.Age):
                     yield c, x

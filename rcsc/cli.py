@@ -217,7 +217,7 @@ def _run_sim(args: argparse.Namespace) -> int:
     # Several CPUs: the JSON-lines trace has one line per CPU cycle; CSV and
     # VCD show the observer's view (what expectations see) per base tick.
     if fmt == "jsonl":
-        text = trace.cycles_to_jsonl(design, run.cpu_cycles) if len(design.cpus) > 1 else trace.to_jsonl(design, run.snapshots)
+        text = trace.cycles_to_jsonl(design, run.cpu_cycles) if len(design.cpus) > 1 else trace.to_jsonl(design, run.trace_snapshots)
     elif fmt == "csv":
         text = trace.to_csv(design, run.snapshots)
     else:
@@ -255,7 +255,8 @@ def _run_test(args: argparse.Namespace) -> int:
             outcome = testrun.run_one(design, scn, cache)
             report.outcomes.append(outcome)
             word = "PASS" if outcome.passed else "FAIL"
-            extra = f" ({outcome.cycles} cycles, {outcome.seconds:.2f} s)" if outcome.cycles else ""
+            unit = "ticks" if outcome.result is not None and outcome.result.multi_cpu else "cycles"
+            extra = f" ({outcome.cycles} {unit}, {outcome.seconds:.2f} s)" if outcome.cycles else ""
             _write(sys.stdout, f"{word} {scn}{extra}\n")
             if not outcome.passed:
                 if outcome.message:
@@ -284,7 +285,7 @@ def _add_budget_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_budget(args: argparse.Namespace) -> int:
-    from rcsc.checks.timing import format_budget_table
+    from rcsc.checks.frames import format_budget_table
 
     result = _check(args.path)
     if result.model is None:

@@ -326,18 +326,26 @@ Simplify the condition, for example by computing a non-linear term in `pre`.
 """),
     # ---- timing -------------------------------------------------------------
     ("E0600", _E, "CPU budget exceeds its heartbeat", """
-The sum of the budgets (worst-case step times) of the controllers scheduled on a
-CPU, plus its declared overhead, must fit in one heartbeat period (paper
-sections 3.8.6 and 3.9). Otherwise cycles overrun.
+The sum of the budgets (worst-case step times) of the controllers due in a
+cycle of a CPU, plus its declared overhead, must fit in one heartbeat period
+(paper sections 3.8.6 and 3.9): the frame rule. Otherwise cycles overrun.
+Every controller steps in the CPU's first cycle whatever its `period`, so
+that frame holds all of them; `rcsc budget` lists every frame.
 """),
     ("W0601", _W, "duration is not a whole number of cycles", """
-A time in a plan (`in_state >= 45 ms`) is measured in whole cycles of the CPU
-the controller runs on. A duration that is not a multiple of the heartbeat is
-rounded up to the next whole cycle; write the rounded value to say what happens.
+A time in a plan (`in_state >= 45 ms`) is measured in whole steps of the
+controller: its CPU's heartbeat, or its `period` if it runs at a divided rate.
+A duration that is not a multiple of it is rounded up to the next whole step;
+write the rounded value to say what happens. A duration compared with an
+`age` is measured in base ticks (the shortest heartbeat of the design).
 """),
-    ("E0602", _E, "CPUs with non-harmonic periods exchange data", """
-When controllers on two CPUs exchange buffers, one heartbeat must be a whole
-multiple of the other so that data arrive at a fixed phase.
+    ("E0602", _E, "CPUs with non-harmonic heartbeats", """
+All CPUs run on one time base whose tick is the shortest heartbeat, and
+buffers cross between CPUs at the deadlines of their writers' cycles. So of
+any two heartbeats one must be a whole multiple of the other: then every
+release and deadline falls on a tick and data arrive at a fixed phase. This
+holds for CPUs that exchange no data too, because scenarios address all CPUs
+in ticks.
 """),
     ("E0603", _E, "controller is not scheduled", """
 Every controller must appear in exactly one CPU `schedule`; a controller that is

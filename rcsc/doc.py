@@ -35,7 +35,7 @@ from markupsafe import Markup
 
 from rcsc import graph
 from rcsc import model as m
-from rcsc.checks.timing import fmt_ns
+from rcsc.checks.frames import fmt_ns
 from rcsc.diagnostics import Diagnostic, Severity
 from rcsc.types import DurationType, EnumType, RecordType, Type
 
@@ -336,6 +336,8 @@ def _controller_facts(design: m.Design, c: m.Controller, cpu: str | None) -> lis
         Fact("budget", fmt_ns(c.budget_ns)),
         Fact("cpu", cpu or "(not scheduled)"),
     ]
+    if c.divider > 1:
+        facts.append(Fact("period", f"{fmt_ns(c.period_ns)} (every {c.divider} cycles of its CPU)"))
     if c.supervisor:
         facts.append(Fact("supervisor", "", _links([c.supervisor], controller_anchor)))
     elif not c.simulator:
@@ -385,6 +387,7 @@ def _cpu_rows(design: m.Design) -> list[CpuRow]:
     rows = []
     for cpu in design.cpus.values():
         names = [u.name for u in cpu.schedule if u.name in design.controllers]
+        # Every controller steps in cycle 1 whatever its period: the heaviest frame.
         total = sum(design.controllers[n].budget_ns for n in dict.fromkeys(names)) + cpu.overhead_ns
         share = f" ({100.0 * total / cpu.heartbeat_ns:.1f} % of the heartbeat)" if cpu.heartbeat_ns > 0 else ""
         rows.append(CpuRow(cpu.name, fmt_ns(cpu.heartbeat_ns), fmt_ns(cpu.overhead_ns), _links(names, controller_anchor), fmt_ns(total) + share))

@@ -29,7 +29,7 @@ import textwrap
 from dataclasses import dataclass, field
 
 from rcsc import model as m
-from rcsc.checks.timing import fmt_ns
+from rcsc.checks.frames import fmt_ns
 from rcsc.diagnostics import Diagnostic
 from rcsc.source import Span
 
@@ -194,6 +194,8 @@ def _controller_label(c: m.Controller, with_facts: bool) -> str:
     lines = [c.name]
     if with_facts:
         lines.append(f"level {c.level}, budget {fmt_ns(c.budget_ns)}")
+        if c.divider > 1:
+            lines.append(f"every {fmt_ns(c.period_ns)}")
     if c.simulator:
         lines.append("(simulator)")
     return "\n".join(lines)
@@ -202,6 +204,8 @@ def _controller_label(c: m.Controller, with_facts: bool) -> str:
 def _controller_node(c: m.Controller, cluster: str | None, with_facts: bool) -> Node:
     kind = "simulator" if c.simulator else "controller"
     tooltip = f"{'simulator' if c.simulator else 'controller'} {c.name}: level {c.level}, budget {fmt_ns(c.budget_ns)}"
+    if c.divider > 1:
+        tooltip += f", period {fmt_ns(c.period_ns)}"
     return Node(c.name, _controller_label(c, with_facts), kind, cluster, tooltip)
 
 

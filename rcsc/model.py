@@ -408,3 +408,14 @@ def stmt_exprs(s: Stmt):
     elif isinstance(s, If):
         for cond, _ in s.branches:
             yield cond
+
+
+def controller_exprs(c: Controller) -> list[Expr]:
+    """The top-level expressions of a controller: pre, post and jobs in order, then the rules' guards."""
+    exprs: list[Expr] = []
+    for stmts in [c.pre, c.post] + [r.jobs for p in c.plans.values() for r in p.rules]:
+        for s in walk_stmts(stmts):
+            exprs.extend(stmt_exprs(s))
+    for p in c.plans.values():
+        exprs.extend(r.guard for r in p.rules if r.guard is not None)
+    return exprs

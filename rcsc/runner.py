@@ -72,6 +72,8 @@ class RunResult:
     snapshots: list[Snapshot]  # one per tick: what expectations see
     results: list[ExpectResult]
     cpu_cycles: list[CpuSnapshot] = field(default_factory=list)  # multi-CPU designs: one per CPU cycle run
+    trace_snapshots: list[Snapshot] = field(default_factory=list)  # single-CPU designs: the cycles that ran
+    multi_cpu: bool = False  # several CPUs: snapshots are per base tick
 
     @property
     def passed(self) -> bool:
@@ -163,7 +165,9 @@ def drive(system: System, sc: Scenario):
 def observe(system: System) -> Snapshot:
     """What an expectation at the current tick sees: each buffer as its writer last wrote it."""
     if len(system.cpus) == 1:
-        return snapshot(next(iter(system.cpus.values())))
+        snap = snapshot(next(iter(system.cpus.values())))
+        snap.cycle = system.tick_count  # differs only after a `stop`: the tick, not the last cycle run
+        return snap
     return observed_snapshot(system)
 
 
@@ -171,10 +175,13 @@ def run_scenario(design: m.Design, sc: Scenario, externs: dict | None = None) ->
     system = System(design, externs)
     snaps: list[Snapshot] = []
     cycles: list[CpuSnapshot] = []
+    ran: list[Snapshot] = []
     multi = len(system.cpus) > 1
     for _ in drive(system, sc):
         snaps.append(observe(system))
         if multi:
             cycles.extend(cpu_snapshot(system, cpu) for cpu, _ in system.ran)
+        elif system.ran:
+            ran.append(snaps[-1])
     results = [evaluate_expectation(design, x, snaps) for x in sc.expects]
-    return RunResult(sc, snaps, results, cycles)
+    return RunResult(sc, snaps, results, cycles, ran, multi)

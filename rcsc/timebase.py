@@ -61,6 +61,12 @@ class System:
         for x in design.crossings:
             self._outputs[x.writer_cpu].append(x)
         self._env: dict[str, object] = {n: clone(v.init) for n, v in design.gm.items() if v.from_env}
+        # The CPU whose copy of a GM variable an observer reads: its writer's.
+        self._writer_cpu: dict[str, str] = {}
+        for c in design.controllers.values():
+            for use in c.writes:
+                if c.cpu:
+                    self._writer_cpu.setdefault(use.name, c.cpu)
         self.ran: list[tuple[str, int]] = []  # (cpu, cycle) of the cycles the last tick ran
 
     @property
@@ -154,24 +160,21 @@ class System:
                 cmd = sim.commands[x.name]
                 pub = _Publication(deadline, "cmd", x.name, CommandBuffer(cmd.serial, cmd.verb, clone(cmd.args)), deadline)
             for reader in x.reader_cpus:
-                self._inbox[reader].append(pub)
+                if reader not in self.stopped:  # a stopped CPU never reads again
+                    self._inbox[reader].append(pub)
 
     # ---- observation -----------------------------------------------------------
 
     def observed_gm(self) -> dict:
         """Each GM variable as its writer last wrote it (inputs: the latest input)."""
         out = {}
-        writer = {x.name: x.writer_cpu for x in self.design.crossings if x.kind == "gm"}
-        for c in self.design.controllers.values():
-            for use in c.writes:
-                if c.cpu:
-                    writer.setdefault(use.name, c.cpu)
         first = next(iter(self.cpus.values()))
         for n in self.design.gm:
             if n in self._env:
                 out[n] = self._env[n]
             else:
-                out[n] = self.cpus[writer[n]].gm[n] if n in writer else first.gm[n]
+                w = self._writer_cpu.get(n)
+                out[n] = self.cpus[w].gm[n] if w is not None else first.gm[n]
         return out
 
     def observed_status(self, ctrl: str) -> StatusBuffer:

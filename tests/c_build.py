@@ -45,10 +45,21 @@ C_CONFIGS = {
 RUST_PROFILES = ("debug", "release")
 
 
+# Example designs that the C and Rust targets refuse for now (several CPUs:
+# E0800; divided rates or ages of Global Memory: E0801), left out of the
+# conformance runs.  This is the one place that leaves an example out; the
+# targets' helper removes a name when its targets build that example, and
+# tests/test_c_backend.py::test_pending_examples_are_refused fails as soon as
+# a listed example builds (or no longer exists), so the list cannot go stale.
+MULTI_CPU_PENDING = frozenset({"examples/machine_tool/machine_tool.rcs"})
+
+
 def _examples() -> list[tuple[Path, Path]]:
     """(design, scenario) for every example scenario and the simulator's test designs."""
     pairs = []
     for design in sorted(ROOT.glob("examples/*/*.rcs")):
+        if design.relative_to(ROOT).as_posix() in MULTI_CPU_PENDING:
+            continue
         for scn in sorted((design.parent / "scenarios").glob("*.scn")):
             pairs.append((design, scn))
     pairs.append((ROOT / "tests/sim/ahead_paper.rcs", ROOT / "tests/sim/ahead_branches.scn"))
@@ -77,7 +88,7 @@ def reference_trace(design: Path, scn: Path) -> bytes:
         sc = text_to_scenario(SourceFile(str(scn), scn.read_text(encoding="utf-8")), result.model, result.diags)
         assert sc is not None, f"{scn} does not load"
         run = run_scenario(result.model, sc)
-        _REFERENCE[scn] = to_jsonl(result.model, run.snapshots).encode("utf-8")
+        _REFERENCE[scn] = to_jsonl(result.model, run.trace_snapshots).encode("utf-8")
     return _REFERENCE[scn]
 
 

@@ -30,6 +30,7 @@ ROOT = Path(__file__).resolve().parent.parent
 EXAMPLES = {
     "submarine": ROOT / "examples" / "submarine" / "submarine.rcs",
     "machining_cell": ROOT / "examples" / "machining_cell" / "machining_cell.rcs",
+    "machine_tool": ROOT / "examples" / "machine_tool" / "machine_tool.rcs",  # two CPUs, a divided rate
 }
 SCREENSHOTS = ROOT / "build" / "doc-screenshots"  # build/ is git-ignored
 

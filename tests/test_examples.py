@@ -33,7 +33,7 @@ MIN_SCENARIOS = 3
 
 def test_examples_are_found() -> None:
     names = {p.parent.name for p in DESIGNS}
-    assert {"submarine", "machining_cell"} <= names, names
+    assert {"submarine", "machining_cell", "machine_tool"} <= names, names
 
 
 @pytest.mark.parametrize("design", DESIGNS, ids=lambda p: p.parent.name)

@@ -213,6 +213,7 @@ KEYWORDS = [
     "post", "plan", "continuous", "otherwise", "new", "done", "error", "report", "if", "then", "else",
     "elif", "and", "or", "not", "true", "false", "in", "cmd", "in_state", "std", "math", "lifecycle",
     "f64", "i32", "i64", "u32", "bool", "duration", "abs", "min", "max", "S1", "TB", "x", "E0",
+    "period", "age", "stop", "freeze",
 ]
 PUNCT = [
     "{", "}", "(", ")", "|", ";", ":", ",", ".", "..", "->", "=", "+=", "-=", "*=", "==", "!=", "<",
@@ -486,7 +487,10 @@ class DesignGen:
         kind = "simulator" if self.chance(0.2) else "controller"
         attrs = []
         for _ in range(self.r.randint(0, 3)):
-            attrs.append(f"level {self.pick(['0', '1', '2', '3', '4', '99999999999'])}" if self.chance(0.5) else f"budget {self.pick(self.DURS)}")
+            attrs.append(
+                f"level {self.pick(['0', '1', '2', '3', '4', '99999999999'])}" if self.chance(0.5)
+                else f"{self.pick(['budget', 'budget', 'period'])} {self.pick(self.DURS)}"
+            )
         body = "\n    ".join(self.ctrl_item() for _ in range(self.r.randint(0, 6)))
         return f"{kind} {self.pick(self.CTRL_NAMES)} {' '.join(attrs)} {{\n    {body}\n}}"
 
@@ -578,7 +582,9 @@ class DesignGen:
             for v in verbs[c] if self.chance(0.9) else verbs[c][:-1]:
                 body.append(self.coherent_plan(v, params[v], subs[c], verbs, numeric, [g for g in mine if gms[g].startswith("f64")]))
             budget = self.pick(["1 ms", "2 ms", "500 us", "10 ms"])
-            out.append(f"{kind} {c} level {level[c]} budget {budget} {{\n    " + "\n    ".join(body) + "\n}\n")
+            # Divided rates, sometimes not a whole number of heartbeats (E0607).
+            period = f" period {self.pick(['20 ms', '30 ms', '60 ms', '90 ms'])}" if self.chance(0.2) else ""
+            out.append(f"{kind} {c} level {level[c]} budget {budget}{period} {{\n    " + "\n    ".join(body) + "\n}\n")
         cpus = r.randint(1, 2)
         groups: list[list[str]] = [[] for _ in range(cpus)]
         for c in ctrls:

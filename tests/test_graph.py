@@ -32,6 +32,7 @@ GOLDEN_GRAPH = Path(__file__).resolve().parent / "golden" / "graph"
 EXAMPLES = {
     "submarine": ROOT / "examples" / "submarine" / "submarine.rcs",
     "machining_cell": ROOT / "examples" / "machining_cell" / "machining_cell.rcs",
+    "machine_tool": ROOT / "examples" / "machine_tool" / "machine_tool.rcs",  # two CPUs, a divided rate
 }
 SVG = "{http://www.w3.org/2000/svg}"
 # Exit codes of a command that drew its picture: 0, or 1 when the design has

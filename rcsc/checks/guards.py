@@ -1218,9 +1218,9 @@ def apply_witness(sim, controller: str, plan: m.Plan, state: str, values: dict[t
     period = getattr(sim, "period_ns", 0) or 1
     sim.cycle = 1 + sim.now // period
     rt.entry_ns = sim.now - in_state
-    gm_stamp = getattr(sim, "gm_stamp", None)
-    if gm_stamp is None:
-        gm_stamp = sim.gm_stamp = {}
+    # Stamps the witness does not name: never written (one base tick before 0).
+    never = -(design.base_tick_ns or period)
+    gm_stamp = sim.gm_stamp = {n: never for n in design.gm}
     for (what, name), age in ages.items():
         if what == "sub":
             rt.subs[name].stamp = sim.now - age

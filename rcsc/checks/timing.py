@@ -13,45 +13,14 @@ simulator and the backends.
 from __future__ import annotations
 
 from rcsc import model as m
+from rcsc.checks.frames import fmt_ns, worst_frame
 from rcsc.diagnostics import Diagnostics
 from rcsc.model import Design
 from rcsc.types import DURATION
 
 
-def fmt_ns(ns: int) -> str:
-    """A duration in the largest unit that is at least 1, exact (3 decimals reach the next unit)."""
-    sign = "-" if ns < 0 else ""
-    ns = abs(ns)
-    for unit, scale in (("s", 1_000_000_000), ("ms", 1_000_000), ("us", 1_000)):
-        if ns >= scale and ns % (scale // 1000) == 0:
-            text = f"{ns / scale:.3f}".rstrip("0").rstrip(".") if ns % scale else str(ns // scale)
-            return f"{sign}{text} {unit}"
-    return f"{sign}{ns} ns"
-
-
 def budget_table(design: Design, cpu: m.Cpu) -> list[tuple[str, int]]:
     return [(u.name, design.controllers[u.name].budget_ns) for u in cpu.schedule]
-
-
-def format_budget_table(design: Design) -> str:
-    """The timing table of every CPU: each controller's budget and its share of the heartbeat."""
-    out = []
-    for cpu in design.cpus.values():
-        hb = cpu.heartbeat_ns
-        out.append(f"cpu {cpu.name}: heartbeat {fmt_ns(hb)}")
-        rows = [(n, str(design.controllers[n].level) + (" sim" if design.controllers[n].simulator else ""), b) for n, b in budget_table(design, cpu)]
-        if cpu.overhead_ns:
-            rows.append(("(overhead)", "", cpu.overhead_ns))
-        total = sum(b for _, _, b in rows)
-        width = max([len(r[0]) for r in rows] + [len("controller"), len("total")])
-        out.append(f"  {'controller':<{width}}  {'level':<6} {'budget':>9} {'share':>7}")
-        for name, level, b in rows + [("total", "", total)]:
-            share = f"{100.0 * b / hb:6.1f}%" if hb > 0 else "      -"
-            out.append(f"  {name:<{width}}  {level:<6} {fmt_ns(b):>9} {share}")
-        slack = hb - total
-        out.append(f"  {'slack' if slack >= 0 else 'OVERRUN':<{width}}  {'':<6} {fmt_ns(abs(slack)):>9}")
-        out.append("")
-    return "\n".join(out)
 
 
 def check(design: Design, diags: Diagnostics) -> None:
@@ -81,8 +50,9 @@ def check(design: Design, diags: Diagnostics) -> None:
     for cpu in design.cpus.values():
         if cpu.heartbeat_ns <= 0:
             continue
-        table = budget_table(design, cpu)
-        total = sum(b for _, b in table) + cpu.overhead_ns
+        # The frame rule: the controllers due in each cycle fit in it.
+        frame = worst_frame(design, cpu)
+        total = frame.total_ns
         if total > cpu.heartbeat_ns:
             diag = diags.add(
                 "E0600",
@@ -90,19 +60,26 @@ def check(design: Design, diags: Diagnostics) -> None:
                 f"cpu `{cpu.name}` needs {fmt_ns(total)} per cycle but its heartbeat is {fmt_ns(cpu.heartbeat_ns)}",
                 "heartbeat too short",
             )
-            rows = ", ".join(f"{n} {fmt_ns(b)}" for n, b in table)
+            rows = ", ".join(f"{n} {fmt_ns(b)}" for n, b in budget_table(design, cpu) if n in frame.controllers)
             diag.with_note(f"budgets: {rows}" + (f", overhead {fmt_ns(cpu.overhead_ns)}" if cpu.overhead_ns else ""))
+            if any(design.controllers[n].divider > 1 for n in frame.controllers):
+                diag.with_note("every controller steps in cycle 1, whatever its period: a longer period lowers the load, not the heaviest frame")
 
     for c in design.controllers.values():
         period = c.period_ns
         if c.cpu is None or period <= 0:
             continue
-        steps = "cycles" if c.divider == 1 else "steps"
+        # Ages count base ticks (stamps are deadlines of any CPU), everything
+        # else this controller's own steps (`in_state`, its timers).
+        with_age = _compared_with_age(c)
         for span, ns in _durations(c):
-            if ns % period:
-                cycles = -(-ns // period)
-                diags.add("W0601", span, f"{fmt_ns(ns)} is not a whole number of {fmt_ns(period)} {steps}", f"rounds up to {cycles} {steps}").with_help(
-                    f"write `{fmt_ns(cycles * period)}` to say what happens"
+            unit, steps = period, "cycles" if c.divider == 1 else "steps"
+            if (span.start, span.end) in with_age:
+                unit, steps = design.base_tick_ns or period, "base ticks"
+            if ns % unit:
+                cycles = -(-ns // unit)
+                diags.add("W0601", span, f"{fmt_ns(ns)} is not a whole number of {fmt_ns(unit)} {steps}", f"rounds up to {cycles} {steps}").with_help(
+                    f"write `{fmt_ns(cycles * unit)}` to say what happens"
                 )
 
     _check_harmonic(design, diags)
@@ -163,13 +140,24 @@ def _in_cpu_order(design: Design, names: set[str]) -> list[str]:
     return [n for n in design.cpus if n in names]
 
 
+def _is_age(e: m.Expr) -> bool:
+    return isinstance(e, m.Age) or (isinstance(e, m.SubView) and e.attr == "age")
+
+
+def _compared_with_age(c: m.Controller) -> set[tuple[int, int]]:
+    """Spans of the duration constants that a comparison puts against an age."""
+    out = set()
+    for e in m.controller_exprs(c):
+        for x in m.walk_expr(e):
+            if isinstance(x, m.Binary) and x.op in ("<", "<=", ">", ">=", "==", "!="):
+                sides = (x.left, x.right)
+                if any(_is_age(y) for side in sides for y in m.walk_expr(side)):
+                    out.update((y.span.start, y.span.end) for side in sides for y in m.walk_expr(side) if isinstance(y, m.Const))
+    return out
+
+
 def _durations(c: m.Controller):
-    exprs = []
-    for stmts in [c.pre, c.post] + [r.jobs for p in c.plans.values() for r in p.rules]:
-        for s in m.walk_stmts(stmts):
-            exprs.extend(m.stmt_exprs(s))
-    for p in c.plans.values():
-        exprs.extend(r.guard for r in p.rules if r.guard is not None)
+    exprs = m.controller_exprs(c)
     seen = set()
     for e in exprs:
         for x in m.walk_expr(e):
