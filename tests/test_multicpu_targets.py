@@ -216,9 +216,10 @@ def _realtime_report(stderr: str) -> list[str]:
     return problems
 
 
-def test_realtime_run_equals_simulator(c_builds, tmp_path):
+@pytest.mark.parametrize("target", ["c", "rust"])
+def test_realtime_run_equals_simulator(c_builds, rust_builds, target, tmp_path):
     """2 s of a 10 ms design on the clock: the simulator's trace, unless the host missed a deadline."""
-    folder = c_builds(TWOCPU, "gcc-O2")
+    folder = c_builds(TWOCPU, "gcc-O2") if target == "c" else rust_builds(TWOCPU)
     scn = tmp_path / "two_seconds.scn"
     scn.write_text((MC / "twocpu_run.scn").read_text().replace("cycles 40", "cycles 200"))
     trace = tmp_path / "rt.jsonl"
