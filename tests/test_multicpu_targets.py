@@ -276,6 +276,16 @@ def test_a_crashed_cpu_stops_the_others(c_builds):
     assert leftovers("twocpu") == []
 
 
+def test_a_cpu_that_cannot_start_stops_the_run(c_builds, tmp_path):
+    """A CPU program missing: the others, waiting at the start barrier, are stopped; nothing is left behind."""
+    folder = tmp_path / "broken"
+    shutil.copytree(c_builds(TWOCPU, "gcc-O2"), folder)
+    (folder / "twocpu_servo").unlink()
+    r = launch(folder, "twocpu", "--lockstep", "--cycles", "10")
+    assert r.returncode == 1
+    assert "cannot start" in r.stderr and "rcs: CPU servo exited with status 127" in r.stderr
+
+
 def test_lockstep_reader_sees_a_crashed_writer(c_builds, tmp_path):
     """Without the launcher: a CPU waiting in lockstep for a writer whose process died gives up with a message."""
     folder = c_builds(TWOCPU, "gcc-O2")

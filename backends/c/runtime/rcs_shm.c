@@ -133,6 +133,7 @@ rcs_shm *rcs_shm_open(const char *name, const rcs_shm_cpu *cpus, size_t n_cpus, 
         return NULL;
     }
     struct stat sb;
+    errno = 0;
     if (fstat(fd, &sb) != 0 || (sb.st_size != 0 && sb.st_size != bytes) ||
         (sb.st_size == 0 && ftruncate(fd, bytes) != 0)) {
         fprintf(err, "rcs: shared memory `%s`: cannot size it to %lld bytes (%s)\n", name, (long long)bytes,
