@@ -44,7 +44,7 @@ def clone(value):
     return value
 
 
-def _clone_status(st: "StatusBuffer") -> "StatusBuffer":
+def clone_status(st: "StatusBuffer") -> "StatusBuffer":
     return StatusBuffer(st.echo_serial, st.status, st.state, st.rule, st.error_code, st.stamp, st.verb, clone(st.fields))
 
 
@@ -260,7 +260,7 @@ class Simulator:
         # 6. Write.
         now = self.now
         st.stamp = now
-        self.statuses[c.name] = _clone_status(st)
+        self.statuses[c.name] = clone_status(st)
         for use in c.writes:
             v = rt.gm[use.name]
             self.gm[use.name] = v if type(v) is not dict else clone(v)

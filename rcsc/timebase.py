@@ -24,7 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from rcsc import model as m
-from rcsc.simulate import CommandBuffer, Simulator, StatusBuffer, _clone_status, clone
+from rcsc.simulate import CommandBuffer, Simulator, StatusBuffer, clone_status, clone
 
 
 @dataclass
@@ -121,7 +121,7 @@ class System:
                 sim.gm[p.name] = clone(p.value)
                 sim.gm_stamp[p.name] = p.stamp
             elif p.kind == "status":
-                st = _clone_status(p.value)  # type: ignore[arg-type]
+                st = clone_status(p.value)  # type: ignore[arg-type]
                 st.stamp = p.stamp
                 sim.statuses[p.name] = st
             else:
@@ -155,7 +155,7 @@ class System:
                 st = sim.statuses[x.name]
                 if st.stamp != sim.now:
                     continue
-                pub = _Publication(deadline, "status", x.name, _clone_status(st), deadline)
+                pub = _Publication(deadline, "status", x.name, clone_status(st), deadline)
             else:
                 cmd = sim.commands[x.name]
                 pub = _Publication(deadline, "cmd", x.name, CommandBuffer(cmd.serial, cmd.verb, clone(cmd.args)), deadline)

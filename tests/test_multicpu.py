@@ -270,3 +270,137 @@ def test_failures_of_multi_cpu_scenarios_name_ticks(design) -> None:
     r = run(design, "cycles 10\nat 1: TOP.RUN()\nexpect at 7: LOW.done\n")
     assert not r.passed and r.multi_cpu
     assert "false at tick 7: LOW.status = EXEC" in failure_text(r)
+
+
+# ---- an independent reading of the trace: rule 3 of the crossing semantics ------------------
+
+
+@pytest.mark.parametrize(
+    "design_path, scenario",
+    [
+        (SIM / "multicpu.rcs", "cycles 40\nat 1: TOP.RUN()\nat 3: load = 0.5\nat 17: stop servo\n"),
+        (Path(__file__).parents[1] / "examples/machine_tool/machine_tool.rcs", (Path(__file__).parents[1] / "examples/machine_tool/scenarios/full_cut.scn").read_text()),
+        (Path(__file__).parents[1] / "examples/machine_tool/machine_tool.rcs", (Path(__file__).parents[1] / "examples/machine_tool/scenarios/servo_cpu_stops.scn").read_text()),
+    ],
+    ids=["multicpu-stop", "machine_tool-full_cut", "machine_tool-servo_stops"],
+)
+def test_reader_copy_is_the_newest_published_by_a_deadline(design_path, scenario) -> None:
+    """Each CPU line's copy of a GM variable written on another CPU equals the writer's
+    copy after its latest cycle whose deadline is at or before the reader's release."""
+    d = check_path(str(design_path)).model
+    assert check_reader_copies(d, run(d, scenario)) > 20
+
+
+def check_reader_copies(d, r) -> int:
+    """Assert rule 3 on every crossing GM variable of a multi-CPU run; returns how many copies it checked."""
+    period = {name: cpu.heartbeat_ns for name, cpu in d.cpus.items()}
+    by_cpu: dict[str, list] = {}
+    for line in r.cpu_cycles:
+        by_cpu.setdefault(line.cpu, []).append(line)
+    checked = 0
+    for x in d.crossings:
+        if x.kind != "gm":
+            continue
+        writer_lines = by_cpu.get(x.writer_cpu, [])
+        for reader in x.reader_cpus:
+            for line in by_cpu.get(reader, []):
+                done = [w for w in writer_lines if w.t + period[x.writer_cpu] <= line.t]
+                expected = done[-1].gm[x.name] if done else d.gm[x.name].init
+                assert line.gm[x.name] == expected, (x.name, reader, line.t)
+                checked += 1
+    return checked
+
+
+# ---- random placements: invariants of the time base ------------------------------------------
+
+PROPERTY_DESIGN = """
+design prop
+gm a: f64 = 0.0
+gm b: f64 = 0.0
+gm c: f64 = 0.0
+controller L3 level 3 budget 1 ms{p3} {{
+    subordinates L2
+    reads b
+    writes c
+    status sub_age: duration = 0 ms
+    status in_age: duration = 0 ms
+    verb RUN
+    post {{ c = c + 1.0; sub_age = age(L2); in_age = age(b); }}
+    plan RUN {{ E0: true | new -> S1 | L2.GO(); E1: L2.done | S1 -> done; E2: L2.error | S1 -> error(1); }}
+}}
+controller L2 level 2 budget 1 ms{p2} {{
+    subordinates L1
+    reads a, c
+    writes b
+    status sub_age: duration = 0 ms
+    status in_age: duration = 0 ms
+    verb GO
+    post {{ b = b + 1.0; sub_age = age(L1); in_age = age(a); }}
+    plan GO {{ E0: true | new -> S1 | L1.GO(); E1: L1.done | S1 -> done; E2: L1.error | S1 -> error(1); }}
+}}
+controller L1 level 1 budget 1 ms{p1} {{
+    reads b
+    writes a
+    status in_age: duration = 0 ms
+    verb GO
+    post {{ a = a + 1.0; in_age = age(b); }}
+    plan GO {{ E0: true | new -> S1; E1: in_state >= 120 ms | S1 -> done; }}
+}}
+{cpus}
+"""
+
+
+@pytest.mark.parametrize("seed", range(16))
+def test_random_placements_keep_the_timing_invariants(seed, tmp_path) -> None:
+    import random
+
+    rnd = random.Random(seed)
+    beats = rnd.choice([[10, 20, 40], [10, 30, 60], [20, 20, 60], [10, 10, 10]])
+    ncpu = rnd.randint(1, 3)
+    names = ["L1", "L2", "L3"]
+    rnd.shuffle(names)  # every CPU gets a controller (an empty schedule is E0209)
+    placement = {n: i if i < ncpu else rnd.randrange(ncpu) for i, n in enumerate(names)}
+    dividers = {n: rnd.choice([1, 1, 2, 3]) for n in ("L1", "L2", "L3")}
+    cpus = []
+    for k in range(ncpu):
+        sched = [n for n in ("L3", "L2", "L1") if placement[n] == k]
+        rnd.shuffle(sched)
+        cpus.append(f"cpu C{k} {{ heartbeat {beats[k]} ms" + (f" schedule {', '.join(sched)}" if sched else "") + " }")
+    periods = {n: f" period {dividers[n] * beats[placement[n]]} ms" if dividers[n] > 1 else "" for n in dividers}
+    path = tmp_path / "prop.rcs"
+    path.write_text(PROPERTY_DESIGN.format(p1=periods["L1"], p2=periods["L2"], p3=periods["L3"], cpus="\n".join(cpus)))
+    result = check_path(str(path))
+    assert result.ok and result.model is not None, [f"{x.code} {x.message}" for x in result.diags.errors]
+    d = result.model
+    ticks = 120
+    r = run(d, f"cycles {ticks}\nat 1: L3.RUN()\n")
+    r2 = run(d, f"cycles {ticks}\nat 1: L3.RUN()\n")  # determinism
+    assert (r2.cpu_cycles, r2.trace_snapshots, r2.snapshots) == (r.cpu_cycles, r.trace_snapshots, r.snapshots)
+    if len(d.cpus) == 1:  # one CPU: the single-CPU trace, read as that CPU's lines
+        from rcsc.trace import CpuSnapshot
+
+        (name, cpu), = d.cpus.items()
+        r.cpu_cycles = [CpuSnapshot(name, s.cycle, (s.cycle - 1) * cpu.heartbeat_ns, s.gm, s.ctrl) for s in r.trace_snapshots]
+    base = d.base_tick_ns
+    horizon = ticks * base
+    used = {c.cpu for c in d.controllers.values()}
+    for name, cpu in d.cpus.items():
+        lines = [x for x in r.cpu_cycles if x.cpu == name]
+        if name in used:  # one line per cycle, released on its grid
+            assert [x.t for x in lines] == list(range(0, horizon, cpu.heartbeat_ns))
+    # Each controller steps on its own grid: its `steps`-like counter is its GM output.
+    written = {"L1": "a", "L2": "b", "L3": "c"}
+    for n, v in written.items():
+        c = d.controllers[n]
+        own = [x for x in r.cpu_cycles if x.cpu == c.cpu]
+        assert [x.gm[v] for x in own] == [float(1 + i // c.divider) for i in range(len(own))], n
+    check_reader_copies(d, r)
+    # While the writer runs, a reader's copy is never older than the writer's period
+    # (once the first value has arrived).
+    settle = 2 * max(c.period_ns for c in d.controllers.values()) + max(x.heartbeat_ns for x in d.cpus.values())
+    readers = {"L3": [("sub_age", "L2"), ("in_age", "L2")], "L2": [("sub_age", "L1"), ("in_age", "L1")], "L1": [("in_age", "L2")]}
+    for n, pairs in readers.items():
+        c = d.controllers[n]
+        for line in (x for x in r.cpu_cycles if x.cpu == c.cpu and x.t >= settle):
+            for fld, writer in pairs:
+                assert 0 <= line.ctrl[n].fields[fld] <= d.controllers[writer].period_ns, (n, fld, line.t)

@@ -2,7 +2,8 @@
 
 Each family is a function `check(design, diags)` that only reads the model
 (except the hierarchy check, which records each controller's supervisor, and
-the timing check, which records each controller's CPU, for later stages).
+the timing check, which records each controller's CPU, divider and period and
+the design's crossing buffers, for later stages).
 """
 
 from __future__ import annotations
