@@ -222,20 +222,27 @@ def test_realtime_run_equals_simulator(c_builds, rust_builds, target, tmp_path):
     folder = c_builds(TWOCPU, "gcc-O2") if target == "c" else rust_builds(TWOCPU)
     scn = tmp_path / "two_seconds.scn"
     scn.write_text((MC / "twocpu_run.scn").read_text().replace("cycles 40", "cycles 200"))
-    trace = tmp_path / "rt.jsonl"
-    t0 = time.monotonic()
-    r = launch(folder, "twocpu", "--scenario", str(scn), "--trace", str(trace))
-    elapsed = time.monotonic() - t0
-    assert r.returncode == 0, r.stderr
-    assert elapsed >= 2.0, f"a real-time run of 200 ticks of 10 ms took {elapsed:.2f} s"
-    tables = re.findall(r"rcs: timing of twocpu on (\w+)", r.stderr)
-    assert sorted(tables) == ["planner", "servo"], r.stderr
-    problems = _realtime_report(r.stderr)
-    if problems:
-        pytest.fail("the real-time run missed its timing, so its trace is not compared: " + "; ".join(problems))
-    want = sim_trace(TWOCPU, scn, tmp_path)
-    got = trace.read_bytes()
-    assert got == want, first_difference(got, want)
+    # A busy host may miss a deadline; then the run says so and is not
+    # compared.  Up to three runs: the first that keeps every deadline must
+    # give the simulator's trace; if none does, the test fails saying why.
+    reports = []
+    for attempt in range(3):
+        trace = tmp_path / f"rt{attempt}.jsonl"
+        t0 = time.monotonic()
+        r = launch(folder, "twocpu", "--scenario", str(scn), "--trace", str(trace))
+        elapsed = time.monotonic() - t0
+        assert r.returncode == 0, r.stderr
+        assert elapsed >= 2.0, f"a real-time run of 200 ticks of 10 ms took {elapsed:.2f} s"
+        tables = re.findall(r"rcs: timing of twocpu on (\w+)", r.stderr)
+        assert sorted(tables) == ["planner", "servo"], r.stderr
+        problems = _realtime_report(r.stderr)
+        if not problems:
+            want = sim_trace(TWOCPU, scn, tmp_path)
+            got = trace.read_bytes()
+            assert got == want, first_difference(got, want)
+            return
+        reports.append(f"run {attempt + 1}: " + "; ".join(problems))
+    pytest.fail("every real-time run missed its timing, so no trace was compared: " + " | ".join(reports))
 
 
 def _start(folder: Path, design: str, *args: str) -> tuple[subprocess.Popen, dict[str, int]]:
