@@ -339,6 +339,27 @@ def built_controllers(design: m.Design, options: BuildOptions) -> list[m.Control
     return [c for c in design.controllers.values() if not (options.exclude_simulators and c.simulator)]
 
 
+def base_cpu(design: m.Design) -> m.Cpu:
+    """The CPU whose heartbeat is the base tick (the first with the shortest one)."""
+    return min(design.cpus.values(), key=lambda c: c.heartbeat_ns)
+
+
+def cpu_ticks(design: m.Design, cpu: str) -> int:
+    """A CPU's heartbeat in base ticks (cycle k of it is released at tick (k - 1) * n + 1)."""
+    return design.cpus[cpu].heartbeat_ns // design.base_tick_ns
+
+
+def keeps_gm_stamps(design: m.Design) -> bool:
+    """Whether some controller reads `age(V)` of Global Memory (then every variable keeps a stamp)."""
+    return next(_gm_ages(design), None) is not None
+
+
+def cpu_gm(design: m.Design, cpu: str) -> list[str]:
+    """The Global Memory variables that the controllers placed on `cpu` read or write, in declaration order."""
+    used = {u.name for c in design.controllers.values() if c.cpu == cpu for u in c.reads + c.writes}
+    return [n for n in design.gm if n in used]
+
+
 def where(span: Span) -> str:
     """`file.rcs:LINE` for comments that lead a reader back to the design."""
     return f"{os.path.basename(span.file.path)}:{span.line}"
@@ -359,6 +380,10 @@ class Target:
     # taken away first, so an interrupted `rcsc build` never leaves a folder
     # that builds half old and half new (see rcsc.safeio).
     entry_files: tuple[str, ...] = ()
+    # Builds several CPUs (a transport between their processes), divided
+    # rates and Global Memory stamps; a target without them refuses such designs.
+    multi_cpu = False
+    MAX_CPUS = 64  # the transport keeps one bit per reading CPU in a 64-bit word
 
     def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
         self.design = design
@@ -368,9 +393,21 @@ class Target:
     # ---- refusals ------------------------------------------------------------------
 
     def check(self, diags: Diagnostics) -> None:
-        """Add diagnostics for designs this target cannot build (default: several CPUs)."""
-        if len(self.design.cpus) > 1:
-            cpus = list(self.design.cpus.values())
+        """Add diagnostics for designs this target cannot build."""
+        cpus = list(self.design.cpus.values())
+        if self.multi_cpu:
+            if len(cpus) > self.MAX_CPUS:
+                d = diags.add(
+                    "E0800",
+                    cpus[self.MAX_CPUS].name_span,
+                    f"the {self.name} target builds designs of at most {self.MAX_CPUS} CPUs; this design has {len(cpus)}",
+                    f"CPU number {self.MAX_CPUS + 1}",
+                )
+                d.with_note("the transport between the CPUs' processes keeps one bit per reading CPU in a 64-bit word")
+            return
+        # A target without a transport between CPUs, divided rates and stamps
+        # of Global Memory refuses what it would otherwise get wrong.
+        if len(cpus) > 1:
             d = diags.add(
                 "E0800",
                 cpus[1].name_span,
@@ -378,14 +415,11 @@ class Target:
                 "second CPU",
             )
             d.with_label(cpus[0].name_span, "first CPU")
-            d.with_note("exchanging buffers between CPUs needs a transport, which no target has yet")
         for c in self.design.controllers.values():
             if c.divider > 1:
-                d = diags.add("E0801", c.period_span or c.name_span, f"the {self.name} target steps every controller every cycle; `{c.name}` has a period", "divided rate")
-                d.with_note("`rcsc sim` and `rcsc test` run divided-rate controllers")
-        for c, age in _gm_ages(self.design):
-            d = diags.add("E0801", age.span, f"the {self.name} target does not keep Global Memory stamps for `age({age.name})`", "age of Global Memory")
-            d.with_note(f"in `{c.name}`; `rcsc sim` and `rcsc test` measure it")
+                diags.add("E0800", c.period_span or c.name_span, f"the {self.name} target steps every controller every cycle; `{c.name}` has a period", "divided rate")
+        for _, age in _gm_ages(self.design):
+            diags.add("E0800", age.span, f"the {self.name} target keeps no stamps of Global Memory for `age({age.name})`", "age of Global Memory")
 
     # ---- comments ------------------------------------------------------------------
 

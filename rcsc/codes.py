@@ -376,18 +376,16 @@ must be a whole multiple n of the CPU's heartbeat (n >= 1). A controller with
 multiple (40 ms, 60 ms) or move it to a CPU whose heartbeat divides 50 ms.
 """),
     # ---- code generation ----------------------------------------------------
-    ("E0800", _E, "the target cannot build a design with several CPUs", """
-`rcsc build` generates one Main Program per CPU, but the buffers that
-controllers on different CPUs share would need a transport (shared memory,
-a network) to travel between them, and no target has one yet. Rather than
-emit code that silently loses those buffers, the build is refused. Put the
-design on one CPU to build it, or check it with `rcsc check` meanwhile.
-"""),
-    ("E0801", _E, "the target does not implement divided rates or Global Memory ages yet", """
-`rcsc sim` and `rcsc test` run controllers with a `period` longer than their
-CPU's heartbeat and measure `age(V)` of Global Memory variables; the code
-generators do not yet. Rather than emit a program that steps such a controller
-every cycle or reads a made-up age, the build is refused.
+    ("E0800", _E, "the target cannot build this design", """
+`rcsc build` generates one Main Program per CPU. The C and Rust targets run
+each CPU as its own process and exchange the buffers that cross between CPUs
+through shared memory, where each published sample records the CPUs that read
+it as one bit of a 64-bit word: a design with more than 64 CPUs is refused
+rather than built with readers that would never be waited for (merge CPUs
+that share a heartbeat). A target without that transport, divided rates
+(`period`) or stamps of Global Memory (`age(V)`) refuses designs that need
+them rather than emit a program that silently loses buffers, steps a
+controller every cycle or reads a made-up age.
 """),
     # ---- scenarios ----------------------------------------------------------
     ("E0700", _E, "operator command to a controller below the top", """

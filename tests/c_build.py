@@ -45,21 +45,24 @@ C_CONFIGS = {
 RUST_PROFILES = ("debug", "release")
 
 
-# Example designs that the C and Rust targets refuse for now (several CPUs:
-# E0800; divided rates or ages of Global Memory: E0801), left out of the
-# conformance runs.  This is the one place that leaves an example out; the
-# targets' helper removes a name when its targets build that example, and
-# tests/test_c_backend.py::test_pending_examples_are_refused fails as soon as
-# a listed example builds (or no longer exists), so the list cannot go stale.
-MULTI_CPU_PENDING = frozenset({"examples/machine_tool/machine_tool.rcs"})
+def cpu_count(design: Path) -> int:
+    """How many CPUs a design declares (its `cpu NAME {` lines)."""
+    return len(re.findall(r"^cpu\s+\w+\s*\{", design.read_text(encoding="utf-8"), re.M))
+
+
+def multi_cpu_examples() -> list[tuple[Path, Path]]:
+    """(design, scenario) for every example scenario of a design with several CPUs:
+    tests/test_multicpu_targets.py runs them (one process per CPU, the launcher)."""
+    return [(d, s) for d in sorted(ROOT.glob("examples/*/*.rcs")) if cpu_count(d) > 1 for s in sorted((d.parent / "scenarios").glob("*.scn"))]
 
 
 def _examples() -> list[tuple[Path, Path]]:
-    """(design, scenario) for every example scenario and the simulator's test designs."""
+    """(design, scenario) for every example scenario of a single-CPU design and the simulator's test designs
+    (the multi-CPU examples: `multi_cpu_examples`)."""
     pairs = []
     for design in sorted(ROOT.glob("examples/*/*.rcs")):
-        if design.relative_to(ROOT).as_posix() in MULTI_CPU_PENDING:
-            continue
+        if cpu_count(design) > 1:
+            continue  # one program per CPU: tests/test_multicpu_targets.py
         for scn in sorted((design.parent / "scenarios").glob("*.scn")):
             pairs.append((design, scn))
     pairs.append((ROOT / "tests/sim/ahead_paper.rcs", ROOT / "tests/sim/ahead_branches.scn"))

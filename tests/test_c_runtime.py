@@ -49,7 +49,7 @@ COMPILERS = ["gcc", "clang"]
 
 
 def _compile(cc: str, extra: list[str], out: Path) -> Path:
-    cmd = [cc, *STRICT, *extra, f"-I{RUNTIME}", str(RUNTIME / "rcs_runtime.c"), str(FIXTURE), "-o", str(out)]
+    cmd = [cc, *STRICT, *extra, f"-I{RUNTIME}", str(RUNTIME / "rcs_runtime.c"), str(RUNTIME / "rcs_shm.c"), str(FIXTURE), "-o", str(out)]
     r = subprocess.run(cmd, capture_output=True, text=True)
     assert r.returncode == 0 and r.stderr == "", f"{' '.join(cmd)}\n{r.stderr}"
     return out

@@ -156,14 +156,14 @@ def test_build_refuses_to_replace_a_file_a_person_wrote(tmp_path: Path, capsys) 
     assert [p.name for p in tmp_path.rglob("*") if p.is_file()] == ["ctrl_PR.rs"], "nothing else may be written"
 
 
-def test_several_cpus_are_refused(tmp_path: Path, capsys) -> None:
+def test_more_than_64_cpus_are_refused(tmp_path: Path, capsys) -> None:
     from rcsc import cli
 
     design = ROOT / "tests/cases/E0800_several_cpus/main.rcs"
     rc = cli.main(["build", str(design), "--target", "rust", "-o", str(tmp_path / "out")])
     assert rc == 1
     err = capsys.readouterr().err
-    assert "error[E0800]" in err and "the rust target builds single-CPU designs" in err
+    assert "error[E0800]" in err and "the rust target builds designs of at most 64 CPUs; this design has 65" in err
     assert not (tmp_path / "out").exists()
 
 

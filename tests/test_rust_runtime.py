@@ -76,7 +76,7 @@ def crate(tmp_path_factory) -> Crate:
 def c_fixture(tmp_path_factory) -> Path:
     """The C Main Program of the same design, when gcc and the C runtime are there."""
     exe = tmp_path_factory.mktemp("c_fixture") / "fixture"
-    cmd = ["gcc", "-std=c99", "-O2", "-I", str(C_RUNTIME), str(C_FIXTURE), str(C_RUNTIME / "rcs_runtime.c"), "-o", str(exe), "-lm"]
+    cmd = ["gcc", "-std=c99", "-O2", "-I", str(C_RUNTIME), str(C_FIXTURE), str(C_RUNTIME / "rcs_runtime.c"), str(C_RUNTIME / "rcs_shm.c"), "-o", str(exe), "-lm"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     return exe

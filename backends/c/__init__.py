@@ -16,6 +16,7 @@ from rcsc.backend import (
     ordered_types,
     StateTest,
     expr_key,
+    keeps_gm_stamps,
     plan_layout,
     tests_state,
     built_controllers,
@@ -27,7 +28,8 @@ from rcsc.backends.c.target import CTarget, _strip_parens, c_comment, c_string
 from rcsc.simulate import zero_value
 from rcsc.types import I32, EnumType, RecordType
 
-RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c")
+RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c", "rcs_shm.h", "rcs_shm.c")
+LAUNCHER_FILES = ("rcs_launch.h", "rcs_launch.c")  # several CPUs only
 
 
 @register
@@ -60,8 +62,14 @@ class CBackend(CTarget):
             files.append(OutFile(main, self.render("main.c.j2", **common, cpu=cpu.name, main_file=main, cpu_string=c_string(cpu.name), deploy=deploy,
                                                    ctrl_headers=[f"{n.ctrl_stem(c.name)}.h" for c in ctrls], **tables)))
             binaries.append({"name": n.binary(cpu.name), "main": main})
-        sources = [f"{n.p}.c"] + [f"{n.ctrl_stem(c.name)}.c" for c in ctrls] + ([f"{n.p}_externs.c"] if externs else []) + ([f"{n.p}_io.c"] if deploy else []) + ["rcs_runtime.c"]
-        build = {"p": n.p, "lib": f"{n.p}__controllers", "sources": sources, "binaries": binaries}
+        sources = [f"{n.p}.c"] + [f"{n.ctrl_stem(c.name)}.c" for c in ctrls] + ([f"{n.p}_externs.c"] if externs else []) + ([f"{n.p}_io.c"] if deploy else []) + ["rcs_runtime.c", "rcs_shm.c"]
+        launcher = None
+        if len(d.cpus) > 1:
+            files += [OutFile(name, self.runtime_file(name)) for name in LAUNCHER_FILES]
+            files.append(OutFile(f"run_{n.p}.c", self.render("run.c.j2", **common, cpus=", ".join(c_string(c) for c in d.cpus),
+                                                             bins=", ".join(c_string(n.binary(c)) for c in d.cpus))))
+            launcher = {"name": f"run_{n.p}", "main": f"run_{n.p}.c", "objects": f"run_{n.p}.o rcs_launch.o"}
+        build = {"p": n.p, "lib": f"{n.p}__controllers", "sources": sources, "binaries": binaries, "launcher": launcher}
         files.append(OutFile("Makefile", self.render("Makefile.j2", **build)))
         files.append(OutFile("CMakeLists.txt", self.render("CMakeLists.txt.j2", **build)))
         return files
@@ -71,7 +79,7 @@ class CBackend(CTarget):
         n = self.n
         return {
             "p": n.p, "design": c_comment(self.design.name), "design_string": c_string(self.design.name),
-            "gm_type": n.fixed("gm"), "buffers_type": n.fixed("buffers"), "buffers_init": n.fixed("buffers_init"),
+            "gm_type": n.fixed("gm"), "gm_stamps_type": n.fixed("gm_stamps"), "buffers_type": n.fixed("buffers"), "buffers_init": n.fixed("buffers_init"),
             "io_read": n.fixed("io_read"), "io_write": n.fixed("io_write"),
             "guard": n.fixed("H"), "externs_guard": n.fixed("externs", "H"), "io_guard": n.fixed("io", "H"),
         }
@@ -109,6 +117,7 @@ class CBackend(CTarget):
             })
         fns = [f for f in d.functions.values() if not f.extern]
         return {
+            "gm_stamps": [self.ident(v) for v in d.gm] if keeps_gm_stamps(d) else [],
             "periods": [{"macro": self.period_macro(c.name), "ns": c.heartbeat_ns} for c in d.cpus.values()],
             "types": types, "consts": consts, "gm": gm, "buffers": buffers,
             "protos": [f"static inline {self.prototype(f)};" for f in fns],
@@ -136,6 +145,8 @@ class CBackend(CTarget):
     def design_source(self, ctrls: list[m.Controller]) -> dict:
         d = self.design
         gm = [f"b->gm.{self.ident(n)} = {self.init_value(v)};" for n, v in d.gm.items()]
+        if keeps_gm_stamps(d):
+            gm += [f"b->gm_stamp.{self.ident(n)} = 0u;" for n in d.gm]
         inits = []
         for c in ctrls:
             cmd, status = self.n.buffer_member(c.name, "cmd"), self.n.buffer_member(c.name, "status")
@@ -174,6 +185,8 @@ class CBackend(CTarget):
             "rules": [{"name": n.rule(plan.verb, r.label), "number": info.rule_number[(plan.verb, r.index)]} for plan in c.plans.values() for r in plan.rules],
             "plans": plans,
             "pre": self.stmts(c.pre, 1), "post": self.stmts(c.post, 1),
+            "tick": self.tick(),
+            "gm_stamps": [self.ident(u.name) for u in c.writes] if keeps_gm_stamps(self.design) else [],
         }
         self.info = None
         return ctx

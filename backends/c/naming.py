@@ -40,13 +40,13 @@ C_KEYWORDS = frozenset(
 )
 # Fixed words inside design-wide names; a design name equal to one gets a trailing `_`.
 TAGS = frozenset(
-    "H VERB STATUS PERIOD_NS BUDGET_NS init step args cmd status fields state rule gm buffers buffers_init "
+    "H VERB STATUS PERIOD_NS BUDGET_NS init step args cmd status fields state rule gm gm_stamps buffers buffers_init "
     "io io_read io_write externs".split()
 )
 # Leads of the file-local names (`S_`, `RULE_`, `ctrl_`...) and the runtime's prefixes: a
 # design whose name is one of them, or starts with one and `_`, gets a trailing `_`.
 LEADS = frozenset(
-    "ST S RULE plan cse ctrl step type members fields const params verbs status states rules statuses gm io main "
+    "ST S RULE plan cse ctrl step type members fields const params verbs status states rules statuses gm io main run "
     "rcs RCS".split()
 )
 # The names the Main Program's file defines beside the leads above.

@@ -9,7 +9,7 @@ templates/main.c.j2.
 from __future__ import annotations
 
 from rcsc import model as m
-from rcsc.backend import ordered_types
+from rcsc.backend import cpu_gm, cpu_ticks, keeps_gm_stamps, ordered_types
 from rcsc.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type
 
 from rcsc.backends.c.target import CTarget, c_string
@@ -116,13 +116,17 @@ def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: li
             f"{len(info.rules)}u",
             statuses if c.statuses else "NULL",
             f"{len(c.statuses)}u",
+            f"{c.divider}u",
         ]
         ctrl_tables.append({
             "type": tg.ctrl_type(c.name), "instance": n.local("ctrl", c.name), "step": n.local("step", c.name),
             "init_fn": n.ctrl_part(c.name, "init"), "step_fn": n.ctrl_part(c.name, "step"), "arrays": arrays,
             "row": "{" + ", ".join(row) + "},",
         })
+    gm_stamps = [f"offsetof({tg.n.fixed('buffers')}, gm_stamp.{tg.ident(n)})," for n in d.gm] if keeps_gm_stamps(d) else []
     return {
+        "multi": multi_tables(tg, cpu, ctrls) if len(d.cpus) > 1 else None,
+        "gm_stamps": gm_stamps,
         "period": tg.period_macro(cpu.name),
         "types": types,
         "type_list": type_list,
@@ -132,4 +136,46 @@ def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: li
         "ctrl_tables": ctrl_tables,
         "schedule": ", ".join(f"{index[c.name]}u" for c in schedule),
         "n_schedule": len(schedule),
+    }
+
+
+def multi_tables(tg: CTarget, cpu: m.Cpu, ctrls: list[m.Controller]) -> dict:
+    """What one CPU of a multi-CPU design knows of the others: names, heartbeats
+    in base ticks, the buffers that cross (writer, readers, where they are in
+    the buffers struct and where their stamp is), and what its trace shows."""
+    d, n = tg.design, tg.n
+    buffers = n.fixed("buffers")
+    names = list(d.cpus)
+    kept = keeps_gm_stamps(d)
+    rows = []
+    for x in d.crossings:
+        readers = sum(1 << names.index(r) for r in x.reader_cpus)
+        if x.kind == "gm":
+            member, stamp = f"gm.{tg.ident(x.name)}", f"offsetof({buffers}, gm_stamp.{tg.ident(x.name)})" if kept else "RCS_NO_STAMP"
+        elif x.kind == "cmd":
+            member, stamp = n.buffer_member(x.name, "cmd"), "RCS_NO_STAMP"
+        else:
+            member = n.buffer_member(x.name, "status")
+            stamp = f"offsetof({buffers}, {member}.head.stamp)"
+        rows.append(f"{{{names.index(x.writer_cpu)}u, UINT64_C({hex(readers)}), offsetof({buffers}, {member}), sizeof buf.{member}, {stamp}}}, /* {x.kind} {tg.comment(x.name)} */")
+    gm_names = list(d.gm)
+    return {
+        "names": ", ".join(c_string(n) for n in names),
+        "ticks": ", ".join(f"{cpu_ticks(d, n)}u" for n in names),
+        "crossings": rows,
+        "gm_here": ", ".join(f"{gm_names.index(n)}u" for n in cpu_gm(d, cpu.name)),
+        "ctrls_here": ", ".join(f"{i}u" for i, c in enumerate(ctrls) if c.cpu == cpu.name),
+        "row": [
+            f"{names.index(cpu.name)}u",
+            f"{len(names)}u",
+            "cpu_names",
+            "cpu_ticks",
+            f"INT64_C({d.base_tick_ns})",
+            "crossings" if rows else "NULL",
+            f"{len(rows)}u",
+            "gm_here" if cpu_gm(d, cpu.name) else "NULL",
+            f"{len(cpu_gm(d, cpu.name))}u",
+            "ctrls_here" if any(c.cpu == cpu.name for c in ctrls) else "NULL",
+            f"{sum(1 for c in ctrls if c.cpu == cpu.name)}u",
+        ],
     }

@@ -15,7 +15,7 @@ import re
 
 from rcsc import model as m
 from rcsc.backends.c.naming import CNames
-from rcsc.backend import BuildOptions, CtrlInfo, Target, expr_key, impure_functions, lower_controller
+from rcsc.backend import BuildOptions, CtrlInfo, Target, base_cpu, cpu_ticks, expr_key, impure_functions, lower_controller
 from rcsc.types import BOOL, DURATION, I32, I64, U32, EnumType, FloatType, IntType, RecordType, Type
 
 # Suffix of the rcs_num.h helper for each integer type.
@@ -47,6 +47,7 @@ class CTarget(Target):
     comment = staticmethod(c_comment)
     summary = "C99 controllers (freestanding) and a POSIX Main Program per CPU"
     package = "rcsc.backends.c"
+    multi_cpu = True
 
     def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
         super().__init__(design, options)
@@ -147,6 +148,19 @@ class CTarget(Target):
             return f"buf->{self.n.buffer_member(self.info.c.name, 'cmd')}.args.{self.ident(self.verb)}.{name}"
         return name  # a function's parameter
 
+    def tick(self) -> str:
+        """The tick at which the current cycle of the controller's CPU is released (stamps count ticks)."""
+        assert self.info is not None
+        n = cpu_ticks(self.design, self.info.c.cpu or "")
+        return "cycle" if n == 1 else f"rcs_tick(cycle, {n}u)"
+
+    def age_of(self, stamp: str) -> str:
+        """The time since the tick `stamp`, in base ticks (the shortest heartbeat)."""
+        return f"rcs_cycles_ns({self.tick()}, {stamp}, {self.period_macro(base_cpu(self.design).name)})"
+
+    def age_expr(self, e: m.Age) -> str:
+        return self.age_of(f"buf->gm_stamp.{self.ident(e.name)}")
+
     def instate_expr(self, e: m.InState) -> str:
         assert self.info is not None
         return f"rcs_cycles_ns(cycle, self->entry_cycle, {self.period_macro(self.info.c.cpu or '')})"
@@ -163,7 +177,7 @@ class CTarget(Target):
         if e.attr == "error_code":
             return f"{status}.head.error_code"
         if e.attr == "age":
-            return f"rcs_cycles_ns(cycle, {status}.head.stamp, {self.period_macro(self.info.c.cpu or '')})"
+            return self.age_of(f"{status}.head.stamp")
         if e.attr == "field":
             return f"{status}.f.{self.ident(e.value or '')}"
         raise ValueError(e.attr)

@@ -23,7 +23,7 @@ from __future__ import annotations
 from importlib import resources
 
 from rcsc import model as m
-from rcsc.backend import OutFile, RuleStep, ordered_types, StateTest, built_controllers, expr_key, plan_layout, register, schedule_of, tests_state
+from rcsc.backend import OutFile, RuleStep, ordered_types, StateTest, built_controllers, expr_key, keeps_gm_stamps, plan_layout, register, schedule_of, tests_state
 from rcsc.backends.rust.fmt import Atom, Bin, Call, Node, Struct, arm, assign, expr_stmt, field_decl, fn_head, if_open, let, pad, tail
 from rcsc.backends.rust.target import RustTarget
 from rcsc.simulate import zero_value
@@ -67,8 +67,13 @@ class RustBackend(RustTarget):
         pure = [f for f in d.functions.values() if not f.extern]
         files: list[OutFile] = []
         ctrl_files = [OutFile(f"src/{self.module(c)}.rs", self.render("ctrl.rs.j2", **self.controller(c))) for c in ctrls]
-        files.append(OutFile("Cargo.toml", self.render("Cargo.toml.j2", crate=self.crate, design=d.name,
+        launcher = f"run_{self.crate}" if len(d.cpus) > 1 else None
+        files.append(OutFile("Cargo.toml", self.render("Cargo.toml.j2", crate=self.crate, design=d.name, launcher=launcher,
                                                                   bins=[{"name": self.n.binary(c.name), "path": f"src/bin/{self.n.bin_stem(c.name)}.rs"} for c in d.cpus.values()])))
+        if launcher:
+            files.append(OutFile("src/run.rs", self.render("run.rs.j2", design=self.comment(d.name), design_string=_rust_str(d.name),
+                                                           cpus=", ".join(_rust_str(c) for c in d.cpus),
+                                                           bins=", ".join(_rust_str(self.n.binary(c)) for c in d.cpus))))
         modules = ["num", "types"] + (["functions"] if pure else []) + [self.module(c) for c in ctrls] + (["externs_impl"] if externs else [])
         files.append(OutFile("src/lib.rs", self.render("lib.rs.j2", **self.lib(sorted(modules), externs))))
         files.append(OutFile("src/num.rs", self.runtime_text("num.rs")))
@@ -162,6 +167,7 @@ class RustBackend(RustTarget):
                   for k in d.consts.values()]
         gm_fields = [x for n, v in d.gm.items() for x in field_decl(f"pub {self.ident(n)}: {self.rtype(v.type)}", 1)]
         gm_init = assign("pub const INIT: Gm", "=", Struct("Gm", [(self.ident(n), self.init_value(v)) for n, v in d.gm.items()]), 1)
+        stamps = [x for n in d.gm for x in field_decl(f"pub {self.ident(n)}: u64", 1)] if keeps_gm_stamps(d) else []
         buffers = []
         for c in ctrls:
             info = self.infos[c.name]
@@ -189,14 +195,14 @@ class RustBackend(RustTarget):
                 "n_rules": len(info.rules),
                 "buffer_decls": field_decl(f"pub {cmd_member}: {cmd_type}", 1) + field_decl(f"pub {status_member}: {status_type}", 1),
             })
-        buf_new = tail(Struct("Buffers", [("gm", Atom("Gm::INIT"))] + [
+        buf_new = tail(Struct("Buffers", [("gm", Atom("Gm::INIT"))] + ([("gm_stamp", Call("Default::default"))] if stamps else []) + [
             x for c in ctrls for x in ((self.n.buffer_member(c.name, "cmd"), Call("Default::default")),
                                        (self.n.buffer_member(c.name, "status"), Atom(f"{self.n.ctrl_part(c.name, 'status')}::INIT")))
         ]), 2)
         return {
             "design": d.name,
             "periods": [{"const": self.period_const(c.name), "ns": c.heartbeat_ns, "cpu": c.name} for c in d.cpus.values()],
-            "types": types, "consts": consts, "gm_fields": gm_fields, "gm_init": gm_init,
+            "types": types, "consts": consts, "gm_fields": gm_fields, "gm_init": gm_init, "gm_stamps": stamps,
             "buffers": buffers, "buf_new": buf_new,
         }
 
@@ -277,7 +283,10 @@ class RustBackend(RustTarget):
             new_command += assign(f"{head}.status", "=", Atom("num::ERROR"), 3)
         new_command.append(f"{pad(2)}}}")
         # Write: the commands issued in this step become new with their serial.
-        write = assign(f"{head}.stamp", "=", Atom("cycle"), 2)
+        write = assign(f"{head}.stamp", "=", self.tick(), 2)
+        if keeps_gm_stamps(self.design):
+            for use in c.writes:
+                write += assign(f"buf.gm_stamp.{self.ident(use.name)}", "=", self.tick(), 2)
         for s in subs:
             sent = f"self.sent.{s['member']}"
             write += if_open(Atom(f"self.send.{s['member']}"), 2)
@@ -428,3 +437,8 @@ def _duration(ns: int) -> str:
     if ns % 1_000 == 0:
         return f"{ns // 1_000} us"
     return f"{ns} ns"
+
+
+def _rust_str(text: str) -> str:
+    """A Rust string literal of `text` (names are identifiers; escaped anyway)."""
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'

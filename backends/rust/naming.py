@@ -48,7 +48,8 @@ PRELUDE = frozenset(
 # The names the generated crate and its runtime define or use beside the design's.
 FIXED = frozenset(
     # types.rs, lib.rs, the controllers, num.rs
-    "Buffers Gm StatusHead CommandHead Sent Sending Locals Externs ExternsImpl NoExterns Io Cell INIT "
+    "Buffers Gm GmStamps gm_stamp CrossingDesc MultiDesc CROSSINGS MULTI crossing set_crossing set_gm_stamp record launch multi shm "
+    "StatusHead CommandHead Sent Sending Locals Externs ExternsImpl NoExterns Io Cell INIT "
     "sub_done sub_error sub_executing sub_status num types functions externs_impl io host "
     # the Main Program and host/
     "Main Value Kind TypeDesc FieldDesc VerbDesc ConstDesc GmDesc CtrlDesc DesignDesc StatusView HostDesign "

@@ -12,10 +12,10 @@ from __future__ import annotations
 import re
 
 from rcsc import model as m
-from rcsc.backend import ordered_types
-from rcsc.backends.rust.fmt import Array, Atom, Call, Cast, Node, Struct, Unary, arm, assign, field_decl, fn_head, pad, tail
+from rcsc.backend import cpu_gm, cpu_ticks, keeps_gm_stamps, ordered_types
+from rcsc.backends.rust.fmt import Array, Atom, Call, Cast, Node, Struct, Unary, arm, assign, field_decl, fn_head, let, pad, tail
 from rcsc.backends.rust.target import RustTarget, rust_string
-from rcsc.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type
+from rcsc.types import BOOL, DURATION, I32, U32, EnumType, FloatType, IntType, RecordType, Type
 
 _BUILTIN = {"bool": "host::BOOL", "i32": "host::I32", "i64": "host::I64", "u32": "host::U32", "f64": "host::F64", "duration": "host::DURATION"}
 _VALUE = {"bool": "Bool", "i32": "I32", "i64": "I64", "u32": "U32", "f64": "F64", "duration": "Duration"}
@@ -139,6 +139,7 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
             ("verbs", Unary("&", Array(verbs))),
             ("fields", mp.fields([(n, v.type) for n, v in c.status_fields.items()])),
             ("extra_statuses", Unary("&", Array([Atom(f"({rust_string(s)}, {n})") for s, n in c.statuses.items()]))),
+            ("divider", Atom(str(c.divider))),
         ]))
         names.append(assign(f"static {tg.n.ctrl_part(c.name, 'STATES')}: [&str; {len(info.states)}]", "=", Array([_s(s) for s in info.states]), 0))
         names.append(assign(f"static {tg.n.ctrl_part(c.name, 'RULES')}: [&str; {len(info.rules)}]", "=", Array([_s(r) for r in info.rules]), 0))
@@ -147,7 +148,10 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
         ("design", _s(d.name)), ("cpu", _s(cpu.name)), ("period_ns", Atom(tg.period_const(cpu.name))),
         ("gm", Atom("&GM", 11)), ("consts", Atom("&CONSTS", 11)), ("types", Atom("&TYPES", 11)), ("ctrls", Atom("&CTRLS", 11)),
         ("schedule", Unary("&", Array([Atom(str(index[c.name])) for c in schedule]))),
+        ("multi", Atom("Some(&MULTI)" if len(d.cpus) > 1 else "None")),
     ])
+    if len(d.cpus) > 1:
+        statics += _multi_statics(tg, cpu, ctrls)
     statics.append(assign("static DESIGN: DesignDesc", "=", design, 0))
 
     # HostDesign.
@@ -201,7 +205,10 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
         ])
         views.append(fn_head(0, "", tg.n.status_view(c.name), [f"s: &{tg.n.ctrl_part(c.name, 'status')}"], "StatusView") + tail(view, 1) + ["}"])
 
-    members = [{"name": _member(tg, c), "type": tg.tname(c.name), "module": tg.module(c)} for c in ctrls]
+    methods = _stamp_and_crossing_methods(mp, tg, ctrls)
+
+    # The controllers this CPU steps (the others' buffers are still here: copies).
+    members = [{"name": _member(tg, c), "type": tg.tname(c.name), "module": tg.module(c)} for c in ctrls if c in schedule]
     for mb in members:
         mb["decl"] = field_decl(f"{mb['name']}: {mb['type']}", 1)
     ext_type = "ExternsImpl" if any(f.extern for f in d.functions.values()) else "NoExterns"
@@ -214,7 +221,7 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
     main_body += tail(Call("std::process::exit", [Call("host::run", [Unary("&mut ", Atom("main"))])]), 1)
     # The descriptor constructors the tables use, and the imports of what the
     # generated text uses (the template's own text uses the first four).
-    text = "\n".join(x for group in (statics, views, [command]) for lines in group for x in lines)
+    text = "\n".join(x for group in (statics, views, [command], methods) for lines in group for x in lines)
     ctors = []
     for fn, ty, params, fields in (
         ("field_desc", "FieldDesc", "name: &'static str, ty: &'static TypeDesc", "name, ty"),
@@ -226,7 +233,7 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
             ctors.append(fn_head(0, "const ", fn, params.split(", "), ty) + [f"    {ty} {{ {fields} }}", "}"])
     text += "\n".join(x for c in ctors for x in c)
     host_uses = ["DesignDesc", "HostDesign", "StatusView", "Value"]
-    host_uses += [x for x in ("ConstDesc", "CtrlDesc", "FieldDesc", "GmDesc", "Kind", "TypeDesc", "VerbDesc") if re.search(rf"\b{x}\b", text)]
+    host_uses += [x for x in ("ConstDesc", "CrossingDesc", "CtrlDesc", "FieldDesc", "GmDesc", "Kind", "MultiDesc", "TypeDesc", "VerbDesc") if re.search(rf"\b{x}\b", text)]
     crate = tg.crate
     uses = [f"use host::{x};" for x in host_uses]
     uses += [f"use {crate}::{mb['module']}::{mb['type']};" for mb in members]
@@ -244,6 +251,7 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
         "members": members, "ext_type": ext_type if uses_ext else None,
         "constant": constant, "step": step, "command": command, "command_args": any("args." in x for x in command), "inputs": inputs, "gm_values": gm_values, "status": status,
         "views": views,
+        "methods": methods,
         "helpers": [mp.helpers[k] for k in sorted(mp.helpers) if mp.helpers[k]],
         "main_body": main_body,
     }
@@ -252,3 +260,124 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
 def _member(tg: RustTarget, c: m.Controller) -> str:
     """The field of `Main` that holds a controller (apart from `buf`, `ext` and `io`)."""
     return tg.n.main_member(c.name)
+
+
+
+def _multi_statics(tg: RustTarget, cpu: m.Cpu, ctrls: list[m.Controller]) -> list[list[str]]:
+    """What one CPU of a multi-CPU design knows of the others: names, heartbeats in
+    base ticks, the buffers that cross (writer, readers) and what its trace shows."""
+    d = tg.design
+    names = list(d.cpus)
+    rows = [Struct("CrossingDesc", [("writer", Atom(str(names.index(x.writer_cpu)))),
+                                    ("readers", Atom(str(sum(1 << names.index(r) for r in x.reader_cpus))))]) for x in d.crossings]
+    gm_names = list(d.gm)
+    multi = Struct("MultiDesc", [
+        ("me", Atom(str(names.index(cpu.name)))),
+        ("cpu_names", Unary("&", Array([_s(n) for n in names]))),
+        ("ticks", Unary("&", Array([Atom(str(cpu_ticks(d, n))) for n in names]))),
+        ("base_tick_ns", Atom(str(d.base_tick_ns))),
+        ("crossings", Atom("&CROSSINGS", 11)),
+        ("gm_here", Unary("&", Array([Atom(str(gm_names.index(n))) for n in cpu_gm(d, cpu.name)]))),
+        ("ctrls_here", Unary("&", Array([Atom(str(i)) for i, c in enumerate(ctrls) if c.cpu == cpu.name]))),
+    ])
+    return [assign(f"static CROSSINGS: [CrossingDesc; {len(rows)}]", "=", Array(rows), 0), assign("static MULTI: MultiDesc", "=", multi, 0)]
+
+
+def _stamp_and_crossing_methods(mp: _Main, tg: RustTarget, ctrls: list[m.Controller]) -> list[list[str]]:
+    """HostDesign's `set_gm_stamp` (when the design reads ages of Global Memory)
+    and, for several CPUs, `crossing` / `set_crossing`: each crossing buffer as a
+    `Value` and its stamp, and back."""
+    d = tg.design
+    out: list[list[str]] = []
+    kept = keeps_gm_stamps(d)
+    gm_index = {n: i for i, n in enumerate(d.gm)}
+    if kept:
+        body = [f"{pad(1)}fn set_gm_stamp(&mut self, gm: usize, tick: u64) {{", f"{pad(2)}match gm {{"]
+        for n, i in gm_index.items():
+            body += arm(str(i), Atom(f"self.buf.gm_stamp.{tg.ident(n)} = tick"), 3)
+        body += [f"{pad(3)}_ => {{}}", f"{pad(2)}}}", f"{pad(1)}}}"]
+        out.append(body)
+    if len(d.cpus) <= 1:
+        return out
+    get = [f"{pad(1)}fn crossing(&self, i: usize) -> (Value, u64) {{", f"{pad(2)}match i {{"]
+    put: list[str] = []
+    uses_stamp = False
+    for i, x in enumerate(d.crossings):
+        if x.kind == "gm":
+            v = d.gm[x.name]
+            member = f"self.buf.gm.{tg.ident(x.name)}"
+            stamp = f"self.buf.gm_stamp.{tg.ident(x.name)}" if kept else "0"
+            get += arm(str(i), Call("", [mp.to_value(member, v.type), Atom(stamp)]), 3)
+            sets = assign(member, "=", mp.from_value(Call("Some", [Atom("value")]), v.type), 4)
+            if kept:
+                sets += assign(stamp, "=", Atom("stamp"), 4)
+                uses_stamp = True
+        elif x.kind == "cmd":
+            _buffer_helpers(mp, tg, d.controllers[x.name], "cmd")
+            cmd = f"self.buf.{tg.n.buffer_member(x.name, 'cmd')}"
+            get += arm(str(i), Call("", [Call(_helper(tg, x.name, "cmd", "value"), [Unary("&", Atom(cmd))]), Atom("0")]), 3)
+            sets = expr_stmt_lines(Call(_helper(tg, x.name, "cmd", "set"), [Unary("&mut ", Atom(cmd)), Atom("value")]), 4)
+        else:
+            _buffer_helpers(mp, tg, d.controllers[x.name], "status")
+            status = f"self.buf.{tg.n.buffer_member(x.name, 'status')}"
+            get += arm(str(i), Call("", [Call(_helper(tg, x.name, "status", "value"), [Unary("&", Atom(status))]), Atom(f"{status}.head.stamp")]), 3)
+            sets = expr_stmt_lines(Call(_helper(tg, x.name, "status", "set"), [Unary("&mut ", Atom(status)), Atom("value")]), 4)
+            sets += assign(f"{status}.head.stamp", "=", Atom("stamp"), 4)
+            uses_stamp = True
+        if len(sets) == 1:
+            put += arm(str(i), Atom(sets[0].strip().rstrip(";")), 3)
+        else:
+            put += [f"{pad(3)}{i} => {{"] + sets + [f"{pad(3)}}}"]
+    get += arm("_", Call("", [Atom("Value::Bool(false)"), Atom("0")]), 3) + [f"{pad(2)}}}", f"{pad(1)}}}"]
+    stamp_param = "stamp" if uses_stamp else "_stamp"
+    put = fn_head(1, "", "set_crossing", ["&mut self", "i: usize", "value: &Value", f"{stamp_param}: u64"], None) + [f"{pad(2)}match i {{"] + put
+    put += [f"{pad(3)}_ => {{}}", f"{pad(2)}}}", f"{pad(1)}}}"]
+    return out + [get, put]
+
+
+def expr_stmt_lines(e: Node, indent: int) -> list[str]:
+    from rcsc.backends.rust.fmt import expr_stmt
+
+    return expr_stmt(e, indent)
+
+
+_HEAD = [("echo_serial", U32), ("status", I32), ("verb", I32), ("state", I32), ("rule", I32), ("error_code", I32)]
+
+
+def _buffer_helpers(mp: _Main, tg: RustTarget, c: m.Controller, kind: str) -> None:
+    """`<C>_cmd_value` / `set_<C>_cmd` or `<C>_status_value` / `set_<C>_status`:
+    a command or status buffer (without its stamp) as a `Value` record and back."""
+    name = _helper(tg, c.name, kind, "value")
+    if name in mp.helpers:
+        return
+    if "record" not in mp.helpers:
+        mp.helpers["record"] = fn_head(0, "", "record", ["v: Option<&Value>"], "&[Value]") + [
+            "    match v {", "        Some(Value::Record(f)) => f,", "        _ => &[],", "    }", "}"]
+    var = "c" if kind == "cmd" else "s"
+    get = (lambda k: "f.first()" if k == 0 else f"f.get({k})")
+    if kind == "cmd":
+        head = [("serial", U32), ("verb", I32)]
+        groups = [(f"args.{tg.ident(vn)}", [(q.name, q.type) for q in v.params]) for vn, v in c.verbs.items() if v.params]
+    else:
+        head = _HEAD
+        groups = [("f", [(n, v.type) for n, v in c.status_fields.items()])]
+    items: list[Node] = [mp.to_value(f"{var}.head.{h}", t) for h, t in head]
+    sets = let("f", Call("record", [Call("Some", [Atom("v")])]), 1)
+    sets += [x for k, (h, t) in enumerate(head) for x in assign(f"{var}.head.{h}", "=", mp.from_value(Atom(get(k)), t), 1)]
+    for j, (path, fields) in enumerate(groups):
+        values = [mp.to_value(f"{var}.{path}.{tg.ident(n)}", t) for n, t in fields]
+        items.append(Call("Value::Record", [Call("Vec::from", [Array(values)])]) if values else Atom("Value::Record(Vec::new())"))
+        if fields:
+            a = f"a{j}"
+            sets += let(a, Call("record", [Atom(get(len(head) + j))]), 1)
+            sets += [x for k, (n, t) in enumerate(fields) for x in assign(f"{var}.{path}.{tg.ident(n)}", "=", mp.from_value(Atom(f"{a}.first()" if k == 0 else f"{a}.get({k})"), t), 1)]
+    ty = tg.n.ctrl_part(c.name, kind)
+    setter = _helper(tg, c.name, kind, "set")
+    mp.helpers[name] = fn_head(0, "", name, [f"{var}: &{ty}"], "Value") + tail(Call("Value::Record", [Call("Vec::from", [Array(items)])]), 1) + ["}"]
+    mp.helpers[setter] = fn_head(0, "", setter, [f"{var}: &mut {ty}", "v: &Value"], None) + sets + ["}"]
+
+
+def _helper(tg: RustTarget, ctrl: str, kind: str, tag: str) -> str:
+    """`<C>__cmd__value` / `<C>__cmd__set` (and for `status`): a buffer as a `Value`
+    and back; `__` joins make them distinct from every design name."""
+    return tg.n.join(tg.n.frag(ctrl), kind, tag)

@@ -25,7 +25,7 @@ import re
 
 from rcsc import model as m
 from rcsc.backends.rust.naming import RustNames
-from rcsc.backend import BuildOptions, CtrlInfo, Target, expr_key, impure_functions, initial_value, lower_controller
+from rcsc.backend import BuildOptions, CtrlInfo, Target, base_cpu, cpu_ticks, expr_key, impure_functions, initial_value, lower_controller
 from rcsc.backends.rust.fmt import (
     P_POSTFIX,
     P_UNARY,
@@ -86,6 +86,7 @@ class RustTarget(Target):
     comment = staticmethod(rust_comment)
     summary = "Rust crate: a no_std, unsafe-free controller library and a std Main Program per CPU"
     package = "rcsc.backends.rust"
+    multi_cpu = True
 
     def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
         super().__init__(design, options)
@@ -212,6 +213,23 @@ class RustTarget(Target):
         self.uses.add("types")
         return self.period_const(self.info.c.cpu or "")
 
+    def tick(self) -> Node:
+        """The tick at which the current cycle of the controller's CPU is released (stamps count ticks)."""
+        assert self.info is not None
+        n = cpu_ticks(self.design, self.info.c.cpu or "")
+        if n == 1:
+            return Atom("cycle")
+        self.uses.add("num")
+        return Call("num::tick", [Atom("cycle"), Atom(str(n))])
+
+    def age_of(self, stamp: str) -> Node:
+        """The time since the tick `stamp`, in base ticks (the shortest heartbeat)."""
+        self.uses.update(("num", "cycle", "types"))
+        return Call("num::cycles_ns", [self.tick(), Atom(stamp), Atom(self.period_const(base_cpu(self.design).name))])
+
+    def age_expr(self, e: m.Age) -> Node:
+        return self.age_of(f"buf.gm_stamp.{self.ident(e.name)}")
+
     def instate_expr(self, e: m.InState) -> Node:
         self.uses.update(("num", "cycle"))
         return Call("num::cycles_ns", [Atom("cycle"), Atom("self.entry_cycle"), Atom(self._period())])
@@ -229,8 +247,7 @@ class RustTarget(Target):
         if e.attr == "error_code":
             return Atom(f"{status}.head.error_code")
         if e.attr == "age":
-            self.uses.update(("num", "cycle"))
-            return Call("num::cycles_ns", [Atom("cycle"), Atom(f"{status}.head.stamp"), Atom(self._period())])
+            return self.age_of(f"{status}.head.stamp")
         if e.attr == "field":
             return Atom(f"{status}.f.{self.ident(e.value or '')}")
         raise ValueError(e.attr)

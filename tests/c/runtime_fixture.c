@@ -196,14 +196,14 @@ static void sub_step(uint64_t cycle) {
 
 static const rcs_ctrl ctrls[] = {
     {"TOP", 1, 0, 1000000, top_step, &top_cmd.head, &top_cmd.args, sizeof top_cmd.args, top_verbs, 3,
-     &top_status.head, &top_status.f, top_fields, 7, top_states, 5, top_rules, 3, top_extra, 1},
+     &top_status.head, &top_status.f, top_fields, 7, top_states, 5, top_rules, 3, top_extra, 1, 1},
     {"SUB", 0, 0, 0, sub_step, &sub_cmd.head, &sub_cmd.unused, sizeof sub_cmd.unused, sub_verbs, 1,
-     &sub_status.head, &sub_status.f, sub_fields, 1, sub_states, 4, sub_rules, 1, NULL, 0},
+     &sub_status.head, &sub_status.f, sub_fields, 1, sub_states, 4, sub_rules, 1, NULL, 0, 1},
 };
 static const size_t schedule[] = {1, 0};
 
 static const rcs_design design = {
-    "fixture", "MAIN", 1000000, &gm, gm_fields, gm_from_env, 5, consts, 6, types, 3, ctrls, 2, schedule, 2, NULL, NULL,
+    "fixture", "MAIN", 1000000, &gm, gm_fields, gm_from_env, 5, consts, 6, types, 3, ctrls, 2, schedule, 2, NULL, NULL, NULL, NULL, NULL,
 };
 
 int main(int argc, char **argv) {

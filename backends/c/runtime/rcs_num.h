@@ -25,7 +25,10 @@
 
 /* The head of every status buffer: what the supervisor and the trace read.
  * verb, state and rule are indexes into the controller's name tables
- * (0 = none); stamp is the cycle of the last write. */
+ * (0 = none); stamp is the tick at which the values became visible: the
+ * release of the writer's cycle on its CPU or, in a copy on another CPU,
+ * the deadline of that cycle.  Ticks count the shortest heartbeat of the
+ * design from 1 (tick N begins at (N - 1) * base); 0 = never written. */
 typedef struct {
     uint32_t echo_serial;
     int32_t status;
@@ -125,6 +128,9 @@ static inline int64_t rcs_i32_to_i64(int32_t v) { return (int64_t)v; }
 static inline int64_t rcs_u32_to_i64(uint32_t v) { return (int64_t)v; }
 static inline uint32_t rcs_i32_to_u32(int32_t v) { return (uint32_t)v; }
 static inline uint32_t rcs_i64_to_u32(int64_t v) { return (uint32_t)(uint64_t)v; }
+
+/* The tick at which cycle `cycle` of a CPU whose heartbeat is `ticks` base ticks is released. */
+static inline uint64_t rcs_tick(uint64_t cycle, uint64_t ticks) { return (cycle - 1u) * ticks + 1u; }
 
 /* Cycles elapsed times the period, wrapping like an i64 duration. */
 static inline int64_t rcs_cycles_ns(uint64_t now, uint64_t since, int64_t period_ns) {

@@ -152,7 +152,7 @@ struct vnode {
     size_t n_args;
 };
 
-typedef enum { I_NAME, I_CYCLES, I_COMMAND, I_INPUT, I_EXPECT } ikind;
+typedef enum { I_NAME, I_CYCLES, I_COMMAND, I_INPUT, I_EXPECT, I_STOP, I_FREEZE } ikind;
 typedef enum { W_AT, W_WITHIN, W_FINAL, W_ALWAYS } wkind;
 
 typedef struct {
@@ -181,6 +181,8 @@ typedef struct {
 
 struct rcs_scenario {
     uint64_t cycles;
+    uint64_t stop_tick;     /* this CPU stops at its first release at or after this tick (0: never) */
+    uint64_t *freeze_tick;  /* per controller (0: never) */
     event *inputs;
     size_t n_inputs, cap_inputs;
     event *commands;
@@ -698,6 +700,12 @@ static int parse_item(parser *p, item *it) {
         if (!want(p, ":")) return 0;
         it->name_tok = p->pos;
         if (!want_kind(p, TK_NAME, "a name")) return 0;
+        /* `stop` and `freeze` are keywords here: fault injection. */
+        if ((tok_is(p, it->name_tok, "stop") || tok_is(p, it->name_tok, "freeze")) && tk(p, p->pos)->kind == TK_NAME) {
+            it->kind = tok_is(p, it->name_tok, "stop") ? I_STOP : I_FREEZE;
+            it->name_tok = p->pos++;
+            return 1;
+        }
         if (is_punct(p, p->pos, ".")) {
             it->kind = I_COMMAND;
             p->pos++;
@@ -1088,6 +1096,32 @@ static int check_input(parser *p, rcs_scenario *sc, const item *it, size_t seq) 
     return store_value(p, it->value, d->gm_fields[gi].type, ev.blob, it->value->tok);
 }
 
+/* `at N: stop CPU` / `at N: freeze CTRL`, as rcsc/scenario.py checks them. */
+static int check_fault(parser *p, rcs_scenario *sc, const item *it) {
+    const rcs_design *d = p->d;
+    const uint64_t tick = it->num_ovf ? UINT64_MAX : it->num;
+    if (it->kind == I_STOP) {
+        const rcs_multi *mc = d->multi;
+        size_t n = mc ? mc->n_cpus : 1, i = 0;
+        while (i < n && !tok_names(p, it->name_tok, mc ? mc->cpu_names[i] : d->cpu)) i++;
+        if (i == n) {
+            p_error(p, it->name_tok, "`stop` needs a CPU; the design has no CPU named `%.*s`", TXT(p, it->name_tok));
+            return 0;
+        }
+        if (i == (mc ? mc->self : 0) && (sc->stop_tick == 0 || tick < sc->stop_tick)) sc->stop_tick = tick;
+        return 1;
+    }
+    size_t ci = 0;
+    while (ci < d->n_ctrls && !tok_names(p, it->name_tok, d->ctrls[ci].name)) ci++;
+    if (ci == d->n_ctrls) {
+        p_error(p, it->name_tok, "`freeze` needs a controller; the design has no controller named `%.*s`",
+                TXT(p, it->name_tok));
+        return 0;
+    }
+    if (sc->freeze_tick[ci] == 0 || tick < sc->freeze_tick[ci]) sc->freeze_tick[ci] = tick;
+    return 1;
+}
+
 static void num_text(const parser *p, size_t tok, uint64_t v, int ovf, char *buf, size_t size) {
     if (ovf)
         snprintf(buf, size, "%.*s", TXT(p, tok));
@@ -1136,6 +1170,10 @@ static int check_items(parser *p, rcs_scenario *sc) {
         case I_INPUT:
             if (!check_input(p, sc, it, i)) return 0;
             break;
+        case I_STOP:
+        case I_FREEZE:
+            if (!check_fault(p, sc, it)) return 0;
+            break;
         case I_EXPECT:
             if (it->when == W_WITHIN && (it->lo_ovf || (!it->hi_ovf && it->lo > it->hi))) {
                 char lo[64], hi[64];
@@ -1162,7 +1200,8 @@ static int check_items(parser *p, rcs_scenario *sc) {
             const item *it = &p->items[i];
             int ok = 1;
             if (pass == 0 && it->kind == I_COMMAND) ok = check_range(p, it->num_tok, it->num_tok, it->num, it->num_ovf, cycles);
-            if (pass == 1 && it->kind == I_INPUT) ok = check_range(p, it->num_tok, it->num_tok, it->num, it->num_ovf, cycles);
+            if (pass == 1 && (it->kind == I_INPUT || it->kind == I_STOP || it->kind == I_FREEZE))
+                ok = check_range(p, it->num_tok, it->num_tok, it->num, it->num_ovf, cycles);
             if (pass == 2 && it->kind == I_EXPECT && (it->when == W_AT || it->when == W_WITHIN))
                 ok = check_range(p, it->tok, it->hi_tok, it->hi, it->hi_ovf, cycles);
             if (pass == 3 && it->kind == I_EXPECT && (it->when == W_AT || it->when == W_WITHIN))
@@ -1208,6 +1247,7 @@ void rcs_scenario_free(rcs_scenario *sc) {
     for (size_t i = 0; i < sc->n_commands; i++) free(sc->commands[i].blob);
     free(sc->inputs);
     free(sc->commands);
+    free(sc->freeze_tick);
     free(sc);
 }
 
@@ -1223,6 +1263,7 @@ rcs_scenario *rcs_scenario_load(const char *path, const rcs_design *d, FILE *err
         return NULL;
     }
     rcs_scenario *sc = xcalloc(1, sizeof *sc);
+    sc->freeze_tick = xcalloc(d->n_ctrls ? d->n_ctrls : 1, sizeof *sc->freeze_tick);
     int ok = lex(&p);
     while (ok && tk(&p, p.pos)->kind != TK_EOF) {
         grow((void **)&p.items, &p.cap_items, p.n_items, sizeof *p.items);
@@ -1244,6 +1285,10 @@ rcs_scenario *rcs_scenario_load(const char *path, const rcs_design *d, FILE *err
 
 uint64_t rcs_scenario_cycles(const rcs_scenario *sc) { return sc ? sc->cycles : 0; }
 
+uint64_t rcs_scenario_stop_tick(const rcs_scenario *sc) { return sc ? sc->stop_tick : 0; }
+
+uint64_t rcs_scenario_freeze_tick(const rcs_scenario *sc, size_t ctrl) { return sc ? sc->freeze_tick[ctrl] : 0; }
+
 /* The first event of `cycle` in a sorted array. */
 static size_t first_of(const event *ev, size_t n, uint64_t cycle) {
     size_t lo = 0, hi = n;
@@ -1257,24 +1302,47 @@ static size_t first_of(const event *ev, size_t n, uint64_t cycle) {
     return lo;
 }
 
+/* An input: the value, and its stamp (the tick it was given at) when kept. */
+static void apply_input(const rcs_design *d, const event *e) {
+    const rcs_field *f = &d->gm_fields[e->target];
+    copy_typed(f->type, (unsigned char *)d->gm + f->offset, e->blob);
+    if (d->gm_stamps != NULL && d->gm_stamps[e->target] != RCS_NO_STAMP)
+        memcpy((unsigned char *)d->buffers + d->gm_stamps[e->target], &e->cycle, sizeof e->cycle);
+}
+
+static void apply_command(const rcs_design *d, const event *e) {
+    const rcs_ctrl *c = &d->ctrls[e->target];
+    const rcs_verb *v = &c->verbs[e->verb];
+    unsigned char *args = c->cmd_args;
+    if (args != NULL && c->cmd_args_size) memset(args, 0, c->cmd_args_size);
+    for (size_t k = 0; k < v->n_params; k++)
+        copy_typed(v->params[k].type, args + v->params[k].offset, e->blob + v->params[k].offset);
+    c->cmd->verb = (int32_t)(e->verb + 1);
+    c->cmd->serial = rcs_next_serial(c->cmd->serial);
+}
+
 void rcs_scenario_apply(rcs_scenario *sc, const rcs_design *d, uint64_t cycle) {
     if (sc == NULL) return;
-    for (size_t i = first_of(sc->inputs, sc->n_inputs, cycle); i < sc->n_inputs && sc->inputs[i].cycle == cycle; i++) {
-        const rcs_field *f = &d->gm_fields[sc->inputs[i].target];
-        copy_typed(f->type, (unsigned char *)d->gm + f->offset, sc->inputs[i].blob);
-    }
+    for (size_t i = first_of(sc->inputs, sc->n_inputs, cycle); i < sc->n_inputs && sc->inputs[i].cycle == cycle; i++)
+        apply_input(d, &sc->inputs[i]);
     for (size_t i = first_of(sc->commands, sc->n_commands, cycle); i < sc->n_commands && sc->commands[i].cycle == cycle;
-         i++) {
-        const event *e = &sc->commands[i];
-        const rcs_ctrl *c = &d->ctrls[e->target];
-        const rcs_verb *v = &c->verbs[e->verb];
-        unsigned char *args = c->cmd_args;
-        if (args != NULL && c->cmd_args_size) memset(args, 0, c->cmd_args_size);
-        for (size_t k = 0; k < v->n_params; k++)
-            copy_typed(v->params[k].type, args + v->params[k].offset, e->blob + v->params[k].offset);
-        c->cmd->verb = (int32_t)(e->verb + 1);
-        c->cmd->serial = rcs_next_serial(c->cmd->serial);
-    }
+         i++)
+        apply_command(d, &sc->commands[i]);
+}
+
+/* Whether controller `ctrl` is placed on this CPU. */
+static int placed_here(const rcs_multi *mc, size_t ctrl) {
+    for (size_t i = 0; i < mc->n_ctrls_here; i++)
+        if (mc->ctrls_here[i] == ctrl) return 1;
+    return 0;
+}
+
+void rcs_scenario_apply_ticks(rcs_scenario *sc, const rcs_design *d, uint64_t lo, uint64_t hi) {
+    if (sc == NULL) return;
+    for (size_t i = first_of(sc->inputs, sc->n_inputs, lo); i < sc->n_inputs && sc->inputs[i].cycle <= hi; i++)
+        apply_input(d, &sc->inputs[i]);
+    for (size_t i = first_of(sc->commands, sc->n_commands, lo); i < sc->n_commands && sc->commands[i].cycle <= hi; i++)
+        if (d->multi == NULL || placed_here(d->multi, sc->commands[i].target)) apply_command(d, &sc->commands[i]);
 }
 
 /* ==== the trace =========================================================== */
@@ -1378,19 +1446,23 @@ static void put_status(FILE *o, const rcs_ctrl *c, int32_t status) {
     fprintf(o, "\"%" PRId32 "\"", status);
 }
 
-void rcs_trace_line(FILE *out, const rcs_design *d, uint64_t cycle) {
-    fprintf(out, "{\"cycle\":%" PRIu64 ",\"gm\":{", cycle);
-    for (size_t i = 0; i < d->n_gm; i++) {
-        if (i) putc(',', out);
-        put_json_str(out, d->gm_fields[i].name);
+/* `"gm":{...},"ctrl":{...}}` and the newline: the Global Memory variables
+ * gm[0..n_gm) and the controllers ctrl[0..n_ctrl) (NULL: all of them). */
+static void trace_rest(FILE *out, const rcs_design *d, const size_t *gm, size_t n_gm, const size_t *ctrl,
+                       size_t n_ctrl) {
+    fputs("\"gm\":{", out);
+    for (size_t j = 0; j < n_gm; j++) {
+        const rcs_field *f = &d->gm_fields[gm ? gm[j] : j];
+        if (j) putc(',', out);
+        put_json_str(out, f->name);
         putc(':', out);
-        put_value(out, d->gm_fields[i].type, (const unsigned char *)d->gm + d->gm_fields[i].offset);
+        put_value(out, f->type, (const unsigned char *)d->gm + f->offset);
     }
     fputs("},\"ctrl\":{", out);
-    for (size_t i = 0; i < d->n_ctrls; i++) {
-        const rcs_ctrl *c = &d->ctrls[i];
+    for (size_t j = 0; j < n_ctrl; j++) {
+        const rcs_ctrl *c = &d->ctrls[ctrl ? ctrl[j] : j];
         const rcs_status_head *s = c->status;
-        if (i) putc(',', out);
+        if (j) putc(',', out);
         put_json_str(out, c->name);
         fprintf(out, ":{\"echo\":%" PRIu32 ",\"status\":", s->echo_serial);
         put_status(out, c, s->status);
@@ -1415,6 +1487,19 @@ void rcs_trace_line(FILE *out, const rcs_design *d, uint64_t cycle) {
         fputs("}}", out);
     }
     fputs("}}\n", out);
+}
+
+void rcs_trace_line(FILE *out, const rcs_design *d, uint64_t cycle) {
+    fprintf(out, "{\"cycle\":%" PRIu64 ",", cycle);
+    trace_rest(out, d, NULL, d->n_gm, NULL, d->n_ctrls);
+}
+
+void rcs_trace_line_cpu(FILE *out, const rcs_design *d, uint64_t cycle, int64_t t_ns) {
+    const rcs_multi *mc = d->multi;
+    fputs("{\"cpu\":", out);
+    put_json_str(out, mc->cpu_names[mc->self]);
+    fprintf(out, ",\"cycle\":%" PRIu64 ",\"t\":%" PRId64 ",", cycle, t_ns);
+    trace_rest(out, d, mc->gm_here, mc->n_gm_here, mc->ctrls_here, mc->n_ctrls_here);
 }
 
 /* ==== rcs_main ============================================================ */
@@ -1468,6 +1553,12 @@ static void usage(FILE *o, const char *prog, const rcs_design *d) {
             "  --no-console      no keyboard console (p/space pause, s step, q quit)\n"
             "  --help            show this text\n",
             prog, d->design ? d->design : "?", d->cpu ? d->cpu : "?", (double)d->period_ns / 1000.0);
+    if (d->multi)
+        fputs("One CPU of a multi-CPU design (start them all with the launcher, run_<design>):\n"
+              "  --run ID          the run shared by the CPUs (names the shared memory)\n"
+              "  --lockstep        wait for each sample the CPU reads: the simulator's trace, no clock\n"
+              "  --cycles N, the scenario's cycles and `at N` count base ticks (the shortest heartbeat)\n",
+              o);
 }
 
 static int parse_count(const char *s, uint64_t *out) {
@@ -1532,7 +1623,7 @@ static void fmt_us(char *buf, size_t size, int64_t ns, int have) {
 }
 
 static void timing_table(const rcs_design *d, const step_stats *st, uint64_t cycles, int64_t max_work,
-                         uint64_t cycle_overruns) {
+                         uint64_t cycle_overruns, uint64_t missing) {
     int w = 10;
     for (size_t i = 0; i < d->n_schedule; i++) {
         int len = (int)strlen(d->ctrls[d->schedule[i]].name);
@@ -1556,12 +1647,14 @@ static void timing_table(const rcs_design *d, const step_stats *st, uint64_t cyc
     }
     fprintf(stderr, "cycles: %" PRIu64 ", max work %.1f us of the %.1f us period, %" PRIu64 " cycle overrun%s\n", cycles,
             us(max_work), us(d->period_ns), cycle_overruns, cycle_overruns == 1 ? "" : "s");
+    if (d->multi)
+        fprintf(stderr, "missing samples: %" PRIu64 " (a sample of another CPU not there at its release)\n", missing);
 }
 
 typedef struct {
-    int fast, realtime, no_timing, no_console, help;
+    int fast, realtime, no_timing, no_console, help, lockstep;
     uint64_t cycles; /* 0: not given */
-    const char *scenario, *trace;
+    const char *scenario, *trace, *run;
 } options;
 
 /* Returns 1, or 0 after a message on stderr. */
@@ -1581,9 +1674,11 @@ static int parse_options(int argc, char **argv, options *o) {
             o->no_timing = 1;
         else if (IS("--no-console") && !val)
             o->no_console = 1;
+        else if (IS("--lockstep") && !val)
+            o->lockstep = 1;
         else if ((IS("--help") || IS("-h")) && !val)
             o->help = 1;
-        else if (IS("--cycles") || IS("--scenario") || IS("--trace")) {
+        else if (IS("--cycles") || IS("--scenario") || IS("--trace") || IS("--run")) {
             if (!val) {
                 if (i + 1 >= argc) {
                     fprintf(stderr, "rcs: %s needs a value\n", a);
@@ -1598,6 +1693,8 @@ static int parse_options(int argc, char **argv, options *o) {
                 }
             } else if (IS("--scenario")) {
                 o->scenario = val;
+            } else if (IS("--run")) {
+                o->run = val;
             } else {
                 o->trace = val;
             }
@@ -1656,6 +1753,193 @@ static void console_poll(console *con, int timeout_ms, uint64_t cycle) {
     for (ssize_t i = 0; i < n; i++) console_key(con, buf[i], cycle);
 }
 
+static int stop_flag(void) { return g_stop != 0; }
+
+/* Steps the controllers of the schedule due in `cycle` (their divider) and
+ * not frozen at `tick`, timing each step. */
+static void run_schedule(const rcs_design *d, const rcs_scenario *sc, step_stats *st, uint64_t cycle, uint64_t tick) {
+    for (size_t i = 0; i < d->n_schedule; i++) {
+        const rcs_ctrl *c = &d->ctrls[d->schedule[i]];
+        if (c->divider > 1 && (cycle - 1u) % c->divider != 0) continue;
+        uint64_t frozen = rcs_scenario_freeze_tick(sc, d->schedule[i]);
+        if (frozen && frozen <= tick) continue;
+        const int64_t s0 = now_ns();
+        c->step(cycle);
+        const int64_t dt = now_ns() - s0;
+        step_stats *s = &st[i];
+        s->last = dt;
+        if (s->n == 0 || dt < s->min) s->min = dt;
+        if (dt > s->max) s->max = dt;
+        s->sum += dt;
+        s->n++;
+        if (c->budget_ns > 0 && dt > c->budget_ns) s->overruns++;
+    }
+}
+
+static size_t round8(size_t n) { return (n + 7u) / 8u * 8u; }
+
+/* The shared-memory layout, the same in every CPU's process: per CPU its
+ * heartbeat, the CPUs that read it and its sample size; at[i]: where
+ * crossing i sits in its writer's sample (its bytes rounded up to 8, then
+ * its stamp when it has one). */
+static void sample_layout(const rcs_design *d, rcs_shm_cpu *cpus, size_t *at) {
+    const rcs_multi *mc = d->multi;
+    for (size_t c = 0; c < mc->n_cpus; c++) {
+        cpus[c].period_ns = (int64_t)mc->ticks[c] * mc->base_tick_ns;
+        cpus[c].payload_size = 0;
+        cpus[c].readers = 0;
+    }
+    for (size_t i = 0; i < mc->n_crossings; i++) {
+        const rcs_crossing *x = &mc->crossings[i];
+        rcs_shm_cpu *w = &cpus[x->writer];
+        at[i] = w->payload_size;
+        w->payload_size += round8(x->size) + (x->stamp != RCS_NO_STAMP ? 8u : 0u);
+        w->readers |= x->readers;
+    }
+}
+
+/* This CPU's crossing outputs into its sample; a stamp (the release tick of
+ * the writing cycle) becomes the tick of that cycle's deadline. */
+static void pack_sample(const rcs_design *d, const size_t *at, unsigned char *sample) {
+    const rcs_multi *mc = d->multi;
+    const unsigned char *b = d->buffers;
+    for (size_t i = 0; i < mc->n_crossings; i++) {
+        const rcs_crossing *x = &mc->crossings[i];
+        if (x->writer != mc->self) continue;
+        memcpy(sample + at[i], b + x->offset, x->size);
+        if (x->stamp != RCS_NO_STAMP) {
+            uint64_t st;
+            memcpy(&st, b + x->stamp, sizeof st);
+            if (st != 0) st += mc->ticks[mc->self];
+            memcpy(sample + at[i] + round8(x->size), &st, sizeof st);
+        }
+    }
+}
+
+/* The buffers that this CPU reads from `writer`'s sample into its copies. */
+static void unpack_sample(const rcs_design *d, const size_t *at, size_t writer, const unsigned char *sample) {
+    const rcs_multi *mc = d->multi;
+    unsigned char *b = d->buffers;
+    for (size_t i = 0; i < mc->n_crossings; i++) {
+        const rcs_crossing *x = &mc->crossings[i];
+        if (x->writer != writer || !((x->readers >> mc->self) & 1u)) continue;
+        memcpy(b + x->offset, sample + at[i], x->size);
+        if (x->stamp != RCS_NO_STAMP) memcpy(b + x->stamp, sample + at[i] + round8(x->size), sizeof(uint64_t));
+    }
+}
+
+typedef struct {
+    uint64_t cycles, overruns, missing;
+    int64_t max_work;
+} run_totals;
+
+/* One CPU of a multi-CPU design: cycle k is released at (k - 1) * period
+ * after the shared start; it takes the other CPUs' newest samples whose
+ * deadline is at or before that instant, applies the scenario's events of
+ * the ticks since its last release, steps its schedule, writes its trace
+ * line and publishes its sample (visible at the cycle's deadline).
+ * Returns the exit status. */
+static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, FILE *trace, uint64_t limit,
+                     step_stats *st, run_totals *tot) {
+    const rcs_multi *mc = d->multi;
+    const size_t me = mc->self;
+    char name[256];
+    if (opt->run == NULL || !rcs_shm_name(name, sizeof name, d->design, opt->run)) {
+        fprintf(stderr,
+                "rcs: CPU %s of the multi-CPU design %s runs under its launcher (run_%s), or give every CPU the same "
+                "--run ID (letters, digits, `_`, `.`, `-`)\n",
+                d->cpu, d->design, d->design);
+        return 2;
+    }
+    rcs_shm_cpu *cpus = xcalloc(mc->n_cpus, sizeof *cpus);
+    size_t *at = xcalloc(mc->n_crossings + 1u, sizeof *at);
+    sample_layout(d, cpus, at);
+    rcs_shm *shm = rcs_shm_open(name, cpus, mc->n_cpus, me, stderr);
+    if (shm == NULL) {
+        free(cpus);
+        free(at);
+        return 2;
+    }
+    unsigned char *mine = xcalloc(1, cpus[me].payload_size + 1u);
+    unsigned char **theirs = xcalloc(mc->n_cpus, sizeof *theirs);
+    uint64_t *have = xcalloc(mc->n_cpus, sizeof *have);
+    for (size_t w = 0; w < mc->n_cpus; w++) theirs[w] = xcalloc(1, cpus[w].payload_size + 1u);
+
+    int status = 0, state = RCS_SHM_FINISHED;
+    const int64_t start = rcs_shm_start(shm, opt->lockstep ? 0 : 100000000, INT64_C(10000000000), stop_flag);
+    if (start < 0) {
+        if (!g_stop) {
+            fprintf(stderr, "rcs: CPU %s: not every CPU of %s started within 10 s\n", d->cpu, d->design);
+            status = 1;
+        }
+        state = RCS_SHM_FAILED;
+    }
+    const int64_t period = d->period_ns;
+    const uint64_t m = mc->ticks[me], stop_tick = rcs_scenario_stop_tick(sc);
+    for (uint64_t k = 1; start >= 0; k++) {
+        const uint64_t tick = (k - 1u) * m + 1u;
+        if (g_stop || (limit && tick > limit)) break;
+        if (stop_tick && tick >= stop_tick) {
+            state = RCS_SHM_STOPPED;
+            break;
+        }
+        const int64_t t = (int64_t)(k - 1u) * period;
+        if (!opt->lockstep) {
+            sleep_until(start + t);
+            if (g_stop) break;
+        }
+        const int64_t t0 = now_ns();
+        for (size_t w = 0; w < mc->n_cpus; w++) {
+            if (w == me || !((cpus[w].readers >> me) & 1u)) continue;
+            if (opt->lockstep && rcs_shm_wait_published(shm, w, t, stop_flag) != 0) {
+                if (!g_stop) {
+                    fprintf(stderr, "rcs: CPU %s: CPU %s failed or is gone\n", d->cpu, mc->cpu_names[w]);
+                    status = 1;
+                }
+                state = RCS_SHM_FAILED;
+                goto done;
+            }
+            int miss = 0;
+            uint64_t got = rcs_shm_fetch(shm, w, t, have[w], theirs[w], &miss);
+            tot->missing += (uint64_t)miss;
+            if (got != have[w]) {
+                have[w] = got;
+                unpack_sample(d, at, w, theirs[w]);
+            }
+        }
+        rcs_shm_next_release(shm, t + period);
+        rcs_scenario_apply_ticks(sc, d, k == 1 ? 1u : (k - 2u) * m + 2u, tick);
+        if (d->io_read) d->io_read();
+        run_schedule(d, sc, st, k, tick);
+        if (d->io_write) d->io_write();
+        if (trace) rcs_trace_line_cpu(trace, d, k, t);
+        pack_sample(d, at, mine);
+        if (opt->lockstep && rcs_shm_wait_readers(shm, k, stop_flag) != 0) {
+            if (!g_stop) {
+                fprintf(stderr, "rcs: CPU %s: a CPU that reads it failed or is gone\n", d->cpu);
+                status = 1;
+            }
+            state = RCS_SHM_FAILED;
+            goto done;
+        }
+        rcs_shm_publish(shm, k, mine);
+        tot->cycles = k;
+        const int64_t t1 = now_ns();
+        if (t1 - t0 > tot->max_work) tot->max_work = t1 - t0;
+        if (opt->lockstep ? t1 - t0 > period : t1 > start + t + period) tot->overruns++;
+    }
+done:
+    rcs_shm_set_state(shm, state);
+    rcs_shm_close(shm, 1);
+    for (size_t w = 0; w < mc->n_cpus; w++) free(theirs[w]);
+    free(theirs);
+    free(have);
+    free(mine);
+    free(cpus);
+    free(at);
+    return status;
+}
+
 int rcs_main(int argc, char **argv, const rcs_design *d) {
     const char *prog = argc > 0 && argv[0] ? argv[0] : "rcs";
     options opt;
@@ -1666,6 +1950,18 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
     if (opt.help) {
         usage(stdout, prog, d);
         return 0;
+    }
+
+    if (d->multi && opt.fast && !opt.lockstep) {
+        fputs("rcs: a CPU of a multi-CPU design runs on its heartbeat or, without a clock, with --lockstep (not "
+              "--fast)\n",
+              stderr);
+        return 2;
+    }
+    if (d->multi == NULL && (opt.lockstep || opt.run)) {
+        fprintf(stderr, "rcs: --lockstep and --run are for the CPUs of a multi-CPU design; %s has one CPU\n",
+                d->design);
+        return 2;
     }
 
     rcs_scenario *sc = NULL;
@@ -1706,7 +2002,7 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
 
     console con;
     memset(&con, 0, sizeof con);
-    if (!opt.no_console && isatty(STDIN_FILENO) && tcgetattr(STDIN_FILENO, &g_saved_tty) == 0) {
+    if (!opt.no_console && d->multi == NULL && isatty(STDIN_FILENO) && tcgetattr(STDIN_FILENO, &g_saved_tty) == 0) {
         struct termios raw = g_saved_tty;
         raw.c_lflag &= ~(tcflag_t)(ICANON | ECHO); /* keys one by one, not echoed; ISIG stays (Ctrl-C) */
         raw.c_cc[VMIN] = 1;
@@ -1725,8 +2021,25 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
     int64_t max_work = 0;
     int64_t deadline = now_ns(); /* the start of the next cycle: start + k * period */
 
-    for (;;) {
+    const uint64_t stop_tick = rcs_scenario_stop_tick(sc);
+    run_totals tot;
+    memset(&tot, 0, sizeof tot);
+    int status = 0;
+    if (d->multi) {
+        status = run_multi(d, &opt, sc, trace, limit, st, &tot);
+        if (status == 2) {
+            if (trace && trace != stdout) fclose(trace);
+            free(st);
+            rcs_scenario_free(sc);
+            return 2;
+        }
+        cycle = tot.cycles;
+        max_work = tot.max_work;
+        cycle_overruns = tot.overruns;
+    }
+    while (d->multi == NULL) {
         if (g_stop || (limit && cycle >= limit)) break;
+        if (stop_tick && cycle + 1u >= stop_tick) break; /* `stop CPU`: no more cycles */
         if (con.on) {
             console_poll(&con, 0, cycle);
             if (con.paused) {
@@ -1742,19 +2055,7 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
         cycle++;
         rcs_scenario_apply(sc, d, cycle);
         if (d->io_read) d->io_read();
-        for (size_t i = 0; i < d->n_schedule; i++) {
-            const rcs_ctrl *c = &d->ctrls[d->schedule[i]];
-            const int64_t s0 = now_ns();
-            c->step(cycle);
-            const int64_t dt = now_ns() - s0;
-            step_stats *s = &st[i];
-            s->last = dt;
-            if (s->n == 0 || dt < s->min) s->min = dt;
-            if (dt > s->max) s->max = dt;
-            s->sum += dt;
-            s->n++;
-            if (c->budget_ns > 0 && dt > c->budget_ns) s->overruns++;
-        }
+        run_schedule(d, sc, st, cycle, cycle);
         if (d->io_write) d->io_write();
         if (trace) rcs_trace_line(trace, d, cycle);
         const int64_t t1 = now_ns();
@@ -1775,7 +2076,6 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
         }
     }
 
-    int status = 0;
     if (trace) {
         if (fflush(trace) != 0 || ferror(trace)) {
             fprintf(stderr, "rcs: error writing the trace `%s`\n", opt.trace);
@@ -1784,7 +2084,7 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
         if (trace != stdout && fclose(trace) != 0) status = 1;
     }
     restore_tty();
-    if (!opt.no_timing) timing_table(d, st, cycle, max_work, cycle_overruns);
+    if (!opt.no_timing) timing_table(d, st, cycle, max_work, cycle_overruns, tot.missing);
     free(st);
     rcs_scenario_free(sc);
     return status;

@@ -19,6 +19,7 @@
 #include <stdio.h>
 
 #include "rcs_num.h"
+#include "rcs_shm.h"
 
 /* Storage of each kind: bool, int32_t, int64_t, uint32_t, double,
  * int64_t (nanoseconds), int32_t (member index), the record's struct. */
@@ -88,7 +89,35 @@ typedef struct {
     size_t n_rules;
     const rcs_status_name *extra_statuses;
     size_t n_extra_statuses;
+    uint64_t divider;        /* steps on the cycles k with (k - 1) % divider == 0 (0 counts as 1) */
 } rcs_ctrl;
+
+/* No stamp: a command buffer, or Global Memory when the design reads no age of it. */
+#define RCS_NO_STAMP ((size_t)-1)
+
+/* A buffer that one CPU writes and others read (each keeps its own copy). */
+typedef struct {
+    size_t writer;    /* CPU index */
+    uint64_t readers; /* bit r: CPU r reads it */
+    size_t offset;    /* the buffer in the buffers struct */
+    size_t size;
+    size_t stamp;     /* offset of its stamp (uint64_t tick) in the buffers struct, or RCS_NO_STAMP */
+} rcs_crossing;
+
+/* What a CPU of a multi-CPU design knows about the others. */
+typedef struct {
+    size_t self;                     /* this CPU's index, in declaration order */
+    size_t n_cpus;
+    const char *const *cpu_names;
+    const uint64_t *ticks;           /* per CPU: its heartbeat in base ticks */
+    int64_t base_tick_ns;            /* the shortest heartbeat: the unit of scenario ticks and stamps */
+    const rcs_crossing *crossings;   /* a CPU's sample holds the buffers it writes, in this order */
+    size_t n_crossings;
+    const size_t *gm_here;           /* Global Memory in this CPU's trace lines (read or written here) */
+    size_t n_gm_here;
+    const size_t *ctrls_here;        /* the controllers placed on this CPU */
+    size_t n_ctrls_here;
+} rcs_multi;
 
 typedef struct {
     const char *design;
@@ -109,6 +138,12 @@ typedef struct {
     /* Deployment build: called before and after the schedule each cycle (may be NULL). */
     void (*io_read)(void);
     void (*io_write)(void);
+    /* Stamps (ticks) of Global Memory, when the design reads `age(V)`:
+     * per gm field its offset in *buffers, or RCS_NO_STAMP; NULL: none kept. */
+    void *buffers;
+    const size_t *gm_stamps;
+    /* Several CPUs: this CPU's place among them (NULL: a single-CPU design). */
+    const rcs_multi *multi;
 } rcs_design;
 
 /* Runs the Main Program; returns the process exit status. */
@@ -125,9 +160,18 @@ rcs_scenario *rcs_scenario_load(const char *path, const rcs_design *d, FILE *err
 uint64_t rcs_scenario_cycles(const rcs_scenario *sc);
 /* Applies the inputs, then the operator commands, given for `cycle`. */
 void rcs_scenario_apply(rcs_scenario *sc, const rcs_design *d, uint64_t cycle);
+/* Several CPUs: the inputs, then the commands to controllers placed on this
+ * CPU, of the ticks lo..hi (the events this CPU's release sees). */
+void rcs_scenario_apply_ticks(rcs_scenario *sc, const rcs_design *d, uint64_t lo, uint64_t hi);
+/* Faults: the first tick at which this CPU stops / controller `ctrl` is
+ * frozen, or 0 for never. */
+uint64_t rcs_scenario_stop_tick(const rcs_scenario *sc);
+uint64_t rcs_scenario_freeze_tick(const rcs_scenario *sc, size_t ctrl);
 void rcs_scenario_free(rcs_scenario *sc);
 
 /* One canonical JSON line (with its newline) of the state at the end of `cycle`. */
 void rcs_trace_line(FILE *out, const rcs_design *d, uint64_t cycle);
+/* Several CPUs: this CPU's line of its cycle `cycle`, released at `t_ns`. */
+void rcs_trace_line_cpu(FILE *out, const rcs_design *d, uint64_t cycle, int64_t t_ns);
 
 #endif /* RCS_RUNTIME_H */

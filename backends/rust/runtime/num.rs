@@ -141,6 +141,12 @@ pub fn max_f64(a: f64, b: f64) -> f64 {
 
 // ---- time ----
 
+/// The tick at which cycle `cycle` of a CPU whose heartbeat is `ticks` base ticks is released.
+#[inline]
+pub fn tick(cycle: u64, ticks: u64) -> u64 {
+    cycle.wrapping_sub(1).wrapping_mul(ticks).wrapping_add(1)
+}
+
 /// Cycles elapsed since `since`, times the period: a duration in
 /// nanoseconds, wrapping like every i64 duration.
 #[inline]

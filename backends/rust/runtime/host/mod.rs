@@ -15,15 +15,19 @@
 // A design uses only some of the kinds, options and helpers.
 #![allow(dead_code, unused_imports)]
 
+mod launch;
+mod multi;
 mod scenario;
+pub mod shm;
 mod sys;
 mod trace;
 
 use std::io::{IsTerminal, Write};
 use std::time::{Duration as StdDuration, Instant};
 
+pub use launch::launch;
 pub use scenario::Scenario;
-pub use trace::{fmt_f64, trace_line};
+pub use trace::{fmt_f64, trace_line, trace_line_cpu};
 
 /// How a type is stored and written: bool, i32, i64, u32, f64, duration
 /// (i64 nanoseconds), enum (member index; the member names) and record
@@ -83,6 +87,33 @@ pub struct CtrlDesc {
     pub fields: &'static [FieldDesc],
     /// Extra status values (`reports X`) and their numbers.
     pub extra_statuses: &'static [(&'static str, i32)],
+    /// Steps on the cycles k with (k - 1) % divider == 0 (`period`; 0 counts as 1).
+    pub divider: u64,
+}
+
+/// A buffer that one CPU writes and others read (each keeps its own copy).
+pub struct CrossingDesc {
+    /// CPU index.
+    pub writer: usize,
+    /// Bit r: CPU r reads it.
+    pub readers: u64,
+}
+
+/// What a CPU of a multi-CPU design knows about the others.
+pub struct MultiDesc {
+    /// This CPU's index, in declaration order.
+    pub me: usize,
+    pub cpu_names: &'static [&'static str],
+    /// Per CPU: its heartbeat in base ticks.
+    pub ticks: &'static [u64],
+    /// The shortest heartbeat: the unit of scenario ticks and stamps.
+    pub base_tick_ns: i64,
+    /// A CPU's sample holds the buffers it writes, in this order.
+    pub crossings: &'static [CrossingDesc],
+    /// Global Memory in this CPU's trace lines (read or written here).
+    pub gm_here: &'static [usize],
+    /// The controllers placed on this CPU.
+    pub ctrls_here: &'static [usize],
 }
 
 pub struct DesignDesc {
@@ -98,6 +129,8 @@ pub struct DesignDesc {
     pub ctrls: &'static [CtrlDesc],
     /// Indexes into `ctrls`, in schedule order.
     pub schedule: &'static [usize],
+    /// Several CPUs: this CPU's place among them (None: a single-CPU design).
+    pub multi: Option<&'static MultiDesc>,
 }
 
 /// A value of any type of the language.
@@ -144,6 +177,15 @@ pub trait HostDesign {
     fn input(&mut self, gm: usize, value: &Value);
     fn gm_value(&self, gm: usize) -> Value;
     fn status(&self, ctrl: usize) -> StatusView;
+    /// The stamp (tick) of Global Memory variable `gm`, when the design reads its age.
+    fn set_gm_stamp(&mut self, _gm: usize, _tick: u64) {}
+    /// Several CPUs: crossing buffer `i` (`desc().multi` crossings) and its
+    /// stamp (the tick it became visible; 0 when it has none).
+    fn crossing(&self, _i: usize) -> (Value, u64) {
+        (Value::Bool(false), 0)
+    }
+    /// Several CPUs: this CPU's copy of crossing buffer `i` and its stamp.
+    fn set_crossing(&mut self, _i: usize, _value: &Value, _stamp: u64) {}
     /// Deployment build: called before the schedule each cycle.
     fn io_read(&mut self) {}
     /// Deployment build: called after the schedule each cycle.
@@ -206,10 +248,12 @@ struct Options {
     no_timing: bool,
     no_console: bool,
     help: bool,
+    lockstep: bool,
     /// 0: not given.
     cycles: u64,
     scenario: Option<String>,
     trace: Option<String>,
+    run: Option<String>,
 }
 
 fn usage(prog: &str, d: &DesignDesc) -> String {
@@ -228,7 +272,14 @@ fn usage(prog: &str, d: &DesignDesc) -> String {
         d.design,
         d.cpu,
         us(d.period_ns)
-    )
+    ) + if d.multi.is_some() {
+        "One CPU of a multi-CPU design (start them all with the launcher, run_<design>):\n  \
+         --run ID          the run shared by the CPUs (names the shared memory)\n  \
+         --lockstep        wait for each sample the CPU reads: the simulator's trace, no clock\n  \
+         --cycles N, the scenario's cycles and `at N` count base ticks (the shortest heartbeat)\n"
+    } else {
+        ""
+    }
 }
 
 /// A positive whole number of cycles (digits only).
@@ -254,8 +305,9 @@ fn parse_options(args: &[String]) -> Result<Options, String> {
             "--realtime" if val.is_none() => o.realtime = true,
             "--no-timing" if val.is_none() => o.no_timing = true,
             "--no-console" if val.is_none() => o.no_console = true,
+            "--lockstep" if val.is_none() => o.lockstep = true,
             "--help" | "-h" if val.is_none() => o.help = true,
-            "--cycles" | "--scenario" | "--trace" => {
+            "--cycles" | "--scenario" | "--trace" | "--run" => {
                 if val.is_none() {
                     match it.next() {
                         Some(v) => val = Some(v.clone()),
@@ -273,6 +325,7 @@ fn parse_options(args: &[String]) -> Result<Options, String> {
                         }
                     },
                     "--scenario" => o.scenario = Some(val),
+                    "--run" => o.run = Some(val),
                     _ => o.trace = Some(val),
                 }
             }
@@ -332,6 +385,7 @@ fn timing_table(
     cycles: u64,
     max_work: i64,
     cycle_overruns: u64,
+    missing: u64,
 ) -> String {
     let ctrls: Vec<&CtrlDesc> = d.schedule.iter().filter_map(|&c| d.ctrls.get(c)).collect();
     let w = ctrls.iter().map(|c| c.name.len()).fold(10, usize::max);
@@ -366,6 +420,11 @@ fn timing_table(
         us(d.period_ns),
         if cycle_overruns == 1 { "" } else { "s" }
     ));
+    if d.multi.is_some() {
+        out.push_str(&format!(
+            "missing samples: {missing} (a sample of another CPU not there at its release)\n"
+        ));
+    }
     out
 }
 
@@ -428,6 +487,41 @@ fn strerror(e: &std::io::Error) -> String {
     }
 }
 
+/// Steps the controllers of the schedule due in `cycle` (their divider) and
+/// not frozen at `tick`, timing each step.
+fn run_schedule(
+    design: &mut dyn HostDesign,
+    sc: Option<&Scenario>,
+    st: &mut [StepStats],
+    cycle: u64,
+    tick: u64,
+) {
+    let d = design.desc();
+    for (s, &c) in st.iter_mut().zip(d.schedule) {
+        let (budget, divider) = d.ctrls.get(c).map_or((0, 1), |c| (c.budget_ns, c.divider));
+        if divider > 1 && !(cycle - 1).is_multiple_of(divider) {
+            continue;
+        }
+        let frozen = sc.map_or(0, |s| s.freeze_tick(c));
+        if frozen > 0 && frozen <= tick {
+            continue;
+        }
+        let s0 = Instant::now();
+        design.step(c, cycle);
+        let dt = since(s0, Instant::now());
+        s.last = dt;
+        if s.n == 0 || dt < s.min {
+            s.min = dt;
+        }
+        s.max = s.max.max(dt);
+        s.sum = s.sum.saturating_add(dt);
+        s.n = s.n.saturating_add(1);
+        if budget > 0 && dt > budget {
+            s.overruns = s.overruns.saturating_add(1);
+        }
+    }
+}
+
 /// Runs the Main Program: parses `std::env::args()`, returns the exit status.
 pub fn run(design: &mut dyn HostDesign) -> i32 {
     let d = design.desc();
@@ -446,6 +540,17 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
     if opt.help {
         out_raw(&usage(prog, d));
         return 0;
+    }
+    if d.multi.is_some() && opt.fast && !opt.lockstep {
+        say!("rcs: a CPU of a multi-CPU design runs on its heartbeat or, without a clock, with --lockstep (not --fast)");
+        return 2;
+    }
+    if d.multi.is_none() && (opt.lockstep || opt.run.is_some()) {
+        say!(
+            "rcs: --lockstep and --run are for the CPUs of a multi-CPU design; {} has one CPU",
+            d.design
+        );
+        return 2;
     }
 
     let mut sc: Option<Scenario> = None;
@@ -502,7 +607,7 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
 
     let mut con = ConsoleState::default();
     let mut tty = None;
-    if !opt.no_console && std::io::stdin().is_terminal() {
+    if !opt.no_console && d.multi.is_none() && std::io::stdin().is_terminal() {
         tty = sys::Console::open();
         if tty.is_some() {
             con.on = true;
@@ -519,9 +624,27 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
     let base = Instant::now();
     // The start of the next cycle: start + k * period.
     let mut deadline = since(base, Instant::now());
+    let stop_tick = sc.as_ref().map_or(0, Scenario::stop_tick);
+    let mut totals = multi::Totals::default();
+    let mut status = 0;
+    if d.multi.is_some() {
+        match multi::run(design, &opt, sc.as_ref(), trace.as_mut(), limit, &mut st) {
+            Ok((t, s)) => {
+                totals = t;
+                status = s;
+            }
+            Err(code) => return code,
+        }
+        (cycle, max_work, cycle_overruns) = (totals.cycles, totals.max_work, totals.overruns);
+        trace_failed = totals.trace_failed;
+    }
 
-    loop {
+    while d.multi.is_none() {
         if sys::stop_requested() || pipe_closed || (limit > 0 && cycle >= limit) {
+            break;
+        }
+        // `stop CPU`: no more cycles.
+        if stop_tick > 0 && cycle.saturating_add(1) >= stop_tick {
             break;
         }
         if con.on {
@@ -545,22 +668,7 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
             s.apply(design, cycle);
         }
         design.io_read();
-        for (s, &c) in st.iter_mut().zip(d.schedule) {
-            let budget = d.ctrls.get(c).map_or(0, |c| c.budget_ns);
-            let s0 = Instant::now();
-            design.step(c, cycle);
-            let dt = since(s0, Instant::now());
-            s.last = dt;
-            if s.n == 0 || dt < s.min {
-                s.min = dt;
-            }
-            s.max = s.max.max(dt);
-            s.sum = s.sum.saturating_add(dt);
-            s.n = s.n.saturating_add(1);
-            if budget > 0 && dt > budget {
-                s.overruns = s.overruns.saturating_add(1);
-            }
-        }
+        run_schedule(design, sc.as_ref(), &mut st, cycle, cycle);
         design.io_write();
         if let Some(out) = trace.as_mut() {
             line.clear();
@@ -600,7 +708,6 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
         }
     }
 
-    let mut status = 0;
     if let Some(mut out) = trace.take() {
         if out.flush().is_err() || trace_failed {
             say!(
@@ -612,7 +719,14 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
     }
     drop(tty); // restores the terminal
     if !opt.no_timing {
-        say_raw(&timing_table(d, &st, cycle, max_work, cycle_overruns));
+        say_raw(&timing_table(
+            d,
+            &st,
+            cycle,
+            max_work,
+            cycle_overruns,
+            totals.missing,
+        ));
     }
     status
 }

@@ -426,6 +426,13 @@ enum Item {
         var: usize,
         value: VNode,
     },
+    /// `at N: stop CPU` (stop) or `at N: freeze CTRL`.
+    Fault {
+        num_tok: usize,
+        num: (u64, bool),
+        stop: bool,
+        name: usize,
+    },
     Expect {
         tok: usize,
         when: When,
@@ -691,6 +698,18 @@ impl<'a> Parser<'a> {
             let num = int_token(self.tk(num_tok).text);
             self.want(":")?;
             let name = self.want_kind(Tk::Name, "a name")?;
+            // `stop` and `freeze` are keywords here: fault injection.
+            if (self.tok_is(name, "stop") || self.tok_is(name, "freeze"))
+                && self.tk(self.pos).kind == Tk::Name
+            {
+                self.pos += 1;
+                return Ok(Item::Fault {
+                    num_tok,
+                    num,
+                    stop: self.tok_is(name, "stop"),
+                    name: self.pos - 1,
+                });
+            }
             if self.is_punct(self.pos, ".") {
                 self.pos += 1;
                 let verb = self.want_kind(Tk::Name, "a name")?;
@@ -1178,6 +1197,10 @@ pub struct Scenario {
     cycles: u64,
     inputs: Vec<Event>,
     commands: Vec<Event>,
+    /// This CPU stops at its first release at or after this tick (0: never).
+    stop_tick: u64,
+    /// Per controller: the tick from which it is frozen (0: never).
+    freeze: Vec<u64>,
 }
 
 /// A cycle number as the messages show it: the number, or the token when it overflows.
@@ -1215,6 +1238,8 @@ impl Scenario {
             cycles: 0,
             inputs: Vec::new(),
             commands: Vec::new(),
+            stop_tick: 0,
+            freeze: vec![0; d.ctrls.len()],
         };
         let mut cycles: Option<(u64, usize)> = None;
         for it in &items {
@@ -1303,6 +1328,42 @@ impl Scenario {
                         values: vec![v],
                     });
                 }
+                Item::Fault {
+                    num, stop, name, ..
+                } => {
+                    let text = p.tk(*name).text;
+                    let tick = event_cycle(*num);
+                    let earlier = |t: u64| t == 0 || tick < t;
+                    if *stop {
+                        let (names, me) = match d.multi {
+                            Some(mc) => (mc.cpu_names, mc.me),
+                            None => (std::slice::from_ref(&d.cpu), 0),
+                        };
+                        let Some(i) = names.iter().position(|n| *n == text) else {
+                            return Err(p.error(
+                                *name,
+                                format!("`stop` needs a CPU; the design has no CPU named `{text}`"),
+                            ));
+                        };
+                        if i == me && earlier(sc.stop_tick) {
+                            sc.stop_tick = tick;
+                        }
+                    } else {
+                        let Some(ci) = d.ctrls.iter().position(|c| c.name == text) else {
+                            return Err(p.error(
+                                *name,
+                                format!(
+                                    "`freeze` needs a controller; the design has no controller named `{text}`"
+                                ),
+                            ));
+                        };
+                        if let Some(f) = sc.freeze.get_mut(ci) {
+                            if earlier(*f) {
+                                *f = tick;
+                            }
+                        }
+                    }
+                }
                 Item::Expect {
                     when,
                     when_tok,
@@ -1354,7 +1415,8 @@ impl Scenario {
             for it in &items {
                 match (pass, it) {
                     (0, Item::Command { num_tok, num, .. })
-                    | (1, Item::Input { num_tok, num, .. }) => check(*num_tok, *num_tok, *num)?,
+                    | (1, Item::Input { num_tok, num, .. })
+                    | (1, Item::Fault { num_tok, num, .. }) => check(*num_tok, *num_tok, *num)?,
                     (
                         2 | 3,
                         Item::Expect {
@@ -1388,23 +1450,49 @@ impl Scenario {
         self.cycles
     }
 
+    /// This CPU's `stop` tick (0: never).
+    pub fn stop_tick(&self) -> u64 {
+        self.stop_tick
+    }
+
+    /// The tick from which controller `ctrl` is frozen (0: never).
+    pub fn freeze_tick(&self, ctrl: usize) -> u64 {
+        self.freeze.get(ctrl).copied().unwrap_or(0)
+    }
+
     /// Applies the inputs, then the operator commands, given for `cycle` (each in file order).
     pub fn apply(&self, design: &mut dyn HostDesign, cycle: u64) {
-        let first = self.inputs.partition_point(|e| e.cycle < cycle);
+        self.apply_ticks(design, cycle, cycle, None);
+    }
+
+    /// The inputs, then the commands (to the controllers in `here`, when
+    /// given), of the ticks lo..=hi: what one release of a CPU sees.  An
+    /// input is stamped with its tick.
+    pub fn apply_ticks(
+        &self,
+        design: &mut dyn HostDesign,
+        lo: u64,
+        hi: u64,
+        here: Option<&[usize]>,
+    ) {
+        let first = self.inputs.partition_point(|e| e.cycle < lo);
         for e in self.inputs.iter().skip(first) {
-            if e.cycle != cycle {
+            if e.cycle > hi {
                 break;
             }
             if let Some(v) = e.values.first() {
                 design.input(e.target, v);
+                design.set_gm_stamp(e.target, e.cycle);
             }
         }
-        let first = self.commands.partition_point(|e| e.cycle < cycle);
+        let first = self.commands.partition_point(|e| e.cycle < lo);
         for e in self.commands.iter().skip(first) {
-            if e.cycle != cycle {
+            if e.cycle > hi {
                 break;
             }
-            design.command(e.target, e.verb, &e.values);
+            if here.is_none_or(|h| h.contains(&e.target)) {
+                design.command(e.target, e.verb, &e.values);
+            }
         }
     }
 }

@@ -5,8 +5,10 @@
 // (no libc crate): real-time mode (mlockall, sched_setscheduler with
 // SCHED_FIFO), SIGINT/SIGTERM (a handler that sets an atomic flag; a second
 // signal restores the terminal and exits at once) and the console's terminal
-// mode (tcgetattr/tcsetattr/poll/read).  Every call passes pointers to live,
-// correctly laid out values and checks the result.
+// mode (tcgetattr/tcsetattr/poll/read), and the shared-memory segment of a
+// multi-CPU run (shm_open/ftruncate/mmap: `Segment` hands out its words as
+// `AtomicU64`s, so everything above it is safe code).  Every call passes
+// pointers to live, correctly laid out values and checks the result.
 //
 // Struct layouts and constants are those of Linux (glibc or musl) on
 // x86_64, aarch64, x86, arm and riscv64, which share the generic ABI.  On
@@ -312,4 +314,228 @@ mod imp {
     }
 }
 
+/// The shared-memory segment of a multi-CPU run: `words` 64-bit words, each
+/// used only through atomic operations (see shm.rs).  Linux on 64-bit
+/// targets (off_t is 64 bits there); elsewhere `open` says it is not supported.
+#[cfg(all(
+    target_os = "linux",
+    target_pointer_width = "64",
+    any(
+        target_arch = "x86_64",
+        target_arch = "aarch64",
+        target_arch = "riscv64"
+    )
+))]
+mod seg {
+    use std::ffi::{c_char, c_int, c_long, c_void, CString};
+    use std::sync::atomic::AtomicU64;
+
+    const O_RDWR: c_int = 2;
+    const O_CREAT: c_int = 0o100;
+    const SEEK_END: c_int = 2;
+    const PROT_READ: c_int = 1;
+    const PROT_WRITE: c_int = 2;
+    const MAP_SHARED: c_int = 1;
+    const ESRCH: i32 = 3;
+
+    unsafe extern "C" {
+        fn shm_open(name: *const c_char, oflag: c_int, mode: u32) -> c_int;
+        fn shm_unlink(name: *const c_char) -> c_int;
+        fn ftruncate(fd: c_int, length: c_long) -> c_int;
+        fn lseek(fd: c_int, offset: c_long, whence: c_int) -> c_long;
+        fn mmap(
+            addr: *mut c_void,
+            len: usize,
+            prot: c_int,
+            flags: c_int,
+            fd: c_int,
+            off: c_long,
+        ) -> *mut c_void;
+        fn munmap(addr: *mut c_void, len: usize) -> c_int;
+        fn close(fd: c_int) -> c_int;
+        fn kill(pid: c_int, sig: c_int) -> c_int;
+        fn clock_gettime(clock: c_int, ts: *mut Timespec) -> c_int;
+    }
+
+    const CLOCK_MONOTONIC: c_int = 1;
+
+    #[repr(C)]
+    struct Timespec {
+        tv_sec: i64,
+        tv_nsec: i64,
+    }
+
+    /// CLOCK_MONOTONIC in nanoseconds (the clock of `Instant`, as a number
+    /// that other processes on the host understand).
+    pub fn monotonic_ns() -> u64 {
+        let mut ts = Timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: `ts` is live and laid out as the 64-bit struct timespec.
+        unsafe { clock_gettime(CLOCK_MONOTONIC, &mut ts) };
+        (ts.tv_sec as u64) * 1_000_000_000 + ts.tv_nsec as u64
+    }
+
+    pub struct Segment {
+        base: *mut AtomicU64,
+        words: usize,
+    }
+
+    fn c_name(name: &str) -> Result<CString, String> {
+        CString::new(name).map_err(|_| format!("bad shared-memory name `{name}`"))
+    }
+
+    impl Segment {
+        /// Opens the segment `name`, creating it (zeroed) with `words` words if
+        /// it does not exist; an existing one must have that size.
+        pub fn open(name: &str, words: usize) -> Result<Segment, String> {
+            let cname = c_name(name)?;
+            let bytes = words * 8;
+            // SAFETY: `cname` is a NUL-terminated string live for the call.
+            let fd = unsafe { shm_open(cname.as_ptr(), O_RDWR | O_CREAT, 0o600) };
+            if fd < 0 {
+                let e = std::io::Error::last_os_error();
+                return Err(format!("shared memory `{name}`: shm_open: {e}"));
+            }
+            // SAFETY: `fd` is open; lseek and ftruncate take plain integers.
+            let size = unsafe { lseek(fd, 0, SEEK_END) };
+            let sized = size == bytes as c_long
+                || (size == 0 && unsafe { ftruncate(fd, bytes as c_long) } == 0);
+            if !sized {
+                // SAFETY: `fd` is open.
+                unsafe { close(fd) };
+                return Err(format!(
+                    "shared memory `{name}`: cannot size it to {bytes} bytes"
+                ));
+            }
+            // SAFETY: a fresh shared mapping of the whole object; checked below.
+            let p = unsafe {
+                mmap(
+                    std::ptr::null_mut(),
+                    bytes,
+                    PROT_READ | PROT_WRITE,
+                    MAP_SHARED,
+                    fd,
+                    0,
+                )
+            };
+            // SAFETY: `fd` is open; the mapping stays valid after close.
+            unsafe { close(fd) };
+            if p as isize == -1 {
+                let e = std::io::Error::last_os_error();
+                return Err(format!("shared memory `{name}`: mmap: {e}"));
+            }
+            Ok(Segment {
+                base: p.cast::<AtomicU64>(),
+                words,
+            })
+        }
+
+        /// Word `i` (panics past the end: a layout bug, never data).
+        pub fn word(&self, i: usize) -> &AtomicU64 {
+            assert!(i < self.words, "shared memory word {i} of {}", self.words);
+            // SAFETY: in bounds of a page-aligned mapping that lives as long as
+            // `self`; AtomicU64 has the size and alignment of u64, and every
+            // process touches these words only through atomic operations.
+            unsafe { &*self.base.add(i) }
+        }
+
+        /// Removes the name (harmless when already gone).
+        pub fn unlink(name: &str) {
+            if let Ok(cname) = c_name(name) {
+                // SAFETY: `cname` is live for the call.
+                unsafe { shm_unlink(cname.as_ptr()) };
+            }
+        }
+    }
+
+    impl Drop for Segment {
+        fn drop(&mut self) {
+            // SAFETY: the mapping made in `open`, unmapped once.
+            unsafe { munmap(self.base.cast::<c_void>(), self.words * 8) };
+        }
+    }
+
+    const SIGTERM: c_int = 15;
+    const PR_SET_PDEATHSIG: c_int = 1;
+
+    unsafe extern "C" {
+        fn prctl(option: c_int, arg2: std::ffi::c_ulong, ...) -> c_int;
+    }
+
+    /// Asks process `pid` to stop (SIGTERM).
+    pub fn terminate(pid: u32) {
+        if let Ok(pid) = c_int::try_from(pid) {
+            // SAFETY: sends a signal; no memory is involved.
+            unsafe { kill(pid, SIGTERM) };
+        }
+    }
+
+    /// The child that `cmd` starts gets SIGTERM when the launcher dies.
+    pub fn die_with_parent(cmd: &mut std::process::Command) {
+        use std::os::unix::process::CommandExt;
+        // SAFETY: prctl is async-signal-safe and touches no memory of the parent.
+        unsafe {
+            cmd.pre_exec(|| {
+                prctl(PR_SET_PDEATHSIG, SIGTERM as std::ffi::c_ulong);
+                Ok(())
+            });
+        }
+    }
+
+    /// Whether no process `pid` exists any more.
+    pub fn process_gone(pid: u64) -> bool {
+        let Ok(pid) = c_int::try_from(pid) else {
+            return false;
+        };
+        // SAFETY: signal 0 only checks that the process exists.
+        pid > 0
+            && unsafe { kill(pid, 0) } != 0
+            && std::io::Error::last_os_error().raw_os_error() == Some(ESRCH)
+    }
+}
+
+#[cfg(not(all(
+    target_os = "linux",
+    target_pointer_width = "64",
+    any(
+        target_arch = "x86_64",
+        target_arch = "aarch64",
+        target_arch = "riscv64"
+    )
+)))]
+mod seg {
+    use std::sync::atomic::AtomicU64;
+
+    pub struct Segment {
+        words: Vec<AtomicU64>,
+    }
+
+    impl Segment {
+        pub fn open(_name: &str, _words: usize) -> Result<Segment, String> {
+            Err("multi-CPU runs are not supported on this platform".to_string())
+        }
+
+        pub fn word(&self, i: usize) -> &AtomicU64 {
+            &self.words[i]
+        }
+
+        pub fn unlink(_name: &str) {}
+    }
+
+    pub fn process_gone(_pid: u64) -> bool {
+        false
+    }
+
+    pub fn monotonic_ns() -> u64 {
+        0
+    }
+
+    pub fn terminate(_pid: u32) {}
+
+    pub fn die_with_parent(_cmd: &mut std::process::Command) {}
+}
+
 pub use imp::{catch_stop_signals, realtime, Console};
+pub use seg::{die_with_parent, monotonic_ns, process_gone, terminate, Segment};

@@ -151,9 +151,34 @@ fn status_name(out: &mut String, status: i32, extra: &[(&'static str, i32)]) {
 /// Appends the canonical JSON line (with its newline) of the state at the end of `cycle`.
 pub fn trace_line(out: &mut String, design: &dyn HostDesign, cycle: u64) {
     let d = design.desc();
-    let _ = write!(out, "{{\"cycle\":{cycle},\"gm\":{{");
-    for (i, g) in d.gm.iter().enumerate() {
-        if i > 0 {
+    let _ = write!(out, "{{\"cycle\":{cycle},");
+    let gm: Vec<usize> = (0..d.gm.len()).collect();
+    let ctrls: Vec<usize> = (0..d.ctrls.len()).collect();
+    trace_rest(out, design, &gm, &ctrls);
+}
+
+/// Several CPUs: this CPU's line of its cycle `cycle`, released at `t_ns`.
+pub fn trace_line_cpu(out: &mut String, design: &dyn HostDesign, cycle: u64, t_ns: i64) {
+    let d = design.desc();
+    let Some(mc) = d.multi else {
+        return;
+    };
+    out.push_str("{\"cpu\":");
+    json_str(out, d.cpu);
+    let _ = write!(out, ",\"cycle\":{cycle},\"t\":{t_ns},");
+    trace_rest(out, design, mc.gm_here, mc.ctrls_here);
+}
+
+/// `"gm":{...},"ctrl":{...}}` and the newline, of the Global Memory
+/// variables `gm` and the controllers `ctrls` (indexes).
+fn trace_rest(out: &mut String, design: &dyn HostDesign, gm: &[usize], ctrls: &[usize]) {
+    let d = design.desc();
+    out.push_str("\"gm\":{");
+    for (j, &i) in gm.iter().enumerate() {
+        let Some(g) = d.gm.get(i) else {
+            continue;
+        };
+        if j > 0 {
             out.push(',');
         }
         json_str(out, g.name);
@@ -161,8 +186,11 @@ pub fn trace_line(out: &mut String, design: &dyn HostDesign, cycle: u64) {
         json_value(out, &design.gm_value(i), g.ty);
     }
     out.push_str("},\"ctrl\":{");
-    for (i, c) in d.ctrls.iter().enumerate() {
-        if i > 0 {
+    for (j, &i) in ctrls.iter().enumerate() {
+        let Some(c) = d.ctrls.get(i) else {
+            continue;
+        };
+        if j > 0 {
             out.push(',');
         }
         let s = design.status(i);

@@ -195,6 +195,7 @@ static DESIGN: DesignDesc = DesignDesc {
                 },
             ],
             extra_statuses: &[("AT_GOAL", 4)],
+            divider: 1,
         },
         CtrlDesc {
             name: "SUB",
@@ -210,9 +211,11 @@ static DESIGN: DesignDesc = DesignDesc {
                 ty: &host::I32,
             }],
             extra_statuses: &[],
+            divider: 1,
         },
     ],
     schedule: &[1, 0],
+    multi: None,
 };
 
 const TOP_STATES: [&str; 5] = ["", "new", "done", "error", "MOVING"];
