@@ -24,7 +24,7 @@ from importlib import resources
 
 from rcsc import model as m
 from rcsc.backend import OutFile, RuleStep, ordered_types, StateTest, built_controllers, expr_key, keeps_gm_stamps, plan_layout, register, schedule_of, tests_state
-from rcsc.backends.rust.fmt import Atom, Bin, Call, Node, Struct, arm, assign, expr_stmt, field_decl, fn_head, if_open, let, pad, tail
+from rcsc.backends.rust.fmt import Array, Atom, Bin, Call, Node, Struct, arm, assign, expr_stmt, field_decl, fn_head, if_open, let, pad, tail, Unary
 from rcsc.backends.rust.target import RustTarget
 from rcsc.simulate import zero_value
 from rcsc.types import I32, EnumType, RecordType, Type
@@ -71,9 +71,12 @@ class RustBackend(RustTarget):
         files.append(OutFile("Cargo.toml", self.render("Cargo.toml.j2", crate=self.crate, design=d.name, launcher=launcher,
                                                                   bins=[{"name": self.n.binary(c.name), "path": f"src/bin/{self.n.bin_stem(c.name)}.rs"} for c in d.cpus.values()])))
         if launcher:
-            files.append(OutFile("src/run.rs", self.render("run.rs.j2", design=self.comment(d.name), design_string=_rust_str(d.name),
-                                                           cpus=", ".join(_rust_str(c) for c in d.cpus),
-                                                           bins=", ".join(_rust_str(self.n.binary(c)) for c in d.cpus))))
+            launch = Call("std::process::exit", [Call("host::launch", [
+                Atom(_rust_str(d.name)),
+                Unary("&", Array([Atom(_rust_str(c)) for c in d.cpus])),
+                Unary("&", Array([Atom(_rust_str(self.n.binary(c))) for c in d.cpus])),
+            ])])
+            files.append(OutFile("src/run.rs", self.render("run.rs.j2", design=self.comment(d.name), body=expr_stmt(launch, 1))))
         modules = ["num", "types"] + (["functions"] if pure else []) + [self.module(c) for c in ctrls] + (["externs_impl"] if externs else [])
         files.append(OutFile("src/lib.rs", self.render("lib.rs.j2", **self.lib(sorted(modules), externs))))
         files.append(OutFile("src/num.rs", self.runtime_text("num.rs")))
