@@ -27,6 +27,7 @@ import shutil
 import signal
 import subprocess
 import time
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -361,7 +362,9 @@ def rust_single(single_base):
     env = dict(os.environ, CARGO_TARGET_DIR=str(single_base / "target"), CARGO_TERM_COLOR="never")
     r = subprocess.run(["cargo", "build", "--offline", "--release"], cwd=crate, env=env, capture_output=True, text=True)
     assert r.returncode == 0, r.stderr[-4000:]
-    return single_base / "target" / "release" / "single_main"
+    # The binary's name comes from the Rust naming scheme (`main` is reserved there).
+    (binary,) = tomllib.loads((crate / "Cargo.toml").read_text())["bin"]
+    return single_base / "target" / "release" / binary["name"]
 
 
 @pytest.mark.parametrize("case", SINGLE_CASES, ids=lambda c: c[1].stem)
