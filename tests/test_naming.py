@@ -406,3 +406,13 @@ def test_a_design_named_like_its_controller_with_underscore_names(tmp_path: Path
         assert proc.returncode == 0, proc.stderr
         assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())
     assert '"state":"done","rule":"x_"' in expected.decode().splitlines()[-1]
+
+
+def test_a_member_named_like_a_design_wide_name_stays_apart() -> None:
+    """Found by the property test: field `MAIN_PERIOD_NS` of design `MAIN` once
+    became `MAIN_PERIOD_NS_`, the type of a controller named `PERIOD_NS`."""
+    from rcsc.backends.c.naming import CNames
+
+    n = CNames("MAIN", controllers=["PERIOD_NS"], cpus=["A"])
+    assert n.member("MAIN_PERIOD_NS") != n.ctrl_type("PERIOD_NS")
+    assert n.member("MAIN_PERIOD_NS").startswith("_0")

@@ -140,7 +140,11 @@ class CNames:
 
     def member(self, name: str) -> str:
         """A struct member or a function parameter."""
-        if not nm.is_plain(name):
+        # A name that is not plain, or that starts like a design-wide name
+        # (`<p>_`, which a trailing `_` would not keep apart from a reserved
+        # fragment's `<p>_X_`), gets `_` and its wrapped form: no design-wide
+        # name starts with `_0`.
+        if not nm.is_plain(name) or name.startswith(self.p + "_"):
             return nm.shorten("_" + nm.wrap(name), IDENT_LIMIT)
         return nm.shorten(name + "_" if name in self._member_reserved else name, IDENT_LIMIT)
 
