@@ -67,6 +67,15 @@ deep (for example a sum of hundreds of terms written on one line). rcsc refuses
 it rather than risk running out of stack in later passes. Compute parts of the
 expression in locals or move them into functions.
 """),
+    ("E0008", _E, "invalid configuration", """
+The configuration file (`rcsc.toml`, or the `[tool.rcsc]` table of a
+`pyproject.toml`, the first one found walking up from the checked file) has a
+mistake: it is not valid TOML, it has a key rcsc does not know, a value of the
+wrong type, or a diagnostic code that does not exist. The keys are `select`,
+`ignore`, `severity`, `exclude` and `per-file-ignores` (docs/configuration.md).
+Only warnings can be ignored or have their severity changed: an error means
+the design is wrong whatever a report shows.
+"""),
     # ---- names --------------------------------------------------------------
     ("E0100", _E, "unknown name", """
 A name is used that is not declared where it is used. Inside a controller the

@@ -30,23 +30,24 @@ class CheckResult:
         return not self.diags.has_errors()
 
 
-def check_path(path: str) -> CheckResult:
-    """Load, analyse and check the design whose root file is `path`."""
+def check_path(path: str, as_module: bool = False) -> CheckResult:
+    """Load, analyse and check the design whose root file is `path` (or, with
+    `as_module`, the module `path` on its own)."""
     # A compiler run allocates many long-lived objects and frees few: the
     # cyclic garbage collector would spend about half of a large design's
     # check time scanning them for nothing, so it pauses for the run.
     was_enabled = gc.isenabled()
     gc.disable()
     try:
-        return _check_path(path)
+        return _check_path(path, as_module)
     finally:
         if was_enabled:
             gc.enable()
 
 
-def _check_path(path: str) -> CheckResult:
+def _check_path(path: str, as_module: bool) -> CheckResult:
     diags = Diagnostics()
-    files = path_to_files(path, diags)
+    files = path_to_files(path, diags, as_module)
     if any(f.tree is None for f in files):
         # A file that does not parse leaves holes that would only produce
         # follow-on findings; report the syntax errors alone.

@@ -55,8 +55,11 @@ def stdlib_path(module: str):
     return node if node.is_file() else None
 
 
-def path_to_files(path: str, diags: Diagnostics) -> list[LoadedFile]:
-    """Read and parse the root design file and, transitively, its imports."""
+def path_to_files(path: str, diags: Diagnostics, as_module: bool = False) -> list[LoadedFile]:
+    """Read and parse the root design file and, transitively, its imports.
+
+    With `as_module`, the root may also be a `module` (checked on its own,
+    as `rcsc check` does for a module that no design imports)."""
     try:
         text = _read(path)
     except FileNotFoundError as exc:
@@ -77,7 +80,8 @@ def path_to_files(path: str, diags: Diagnostics) -> list[LoadedFile]:
         module = ""
         if tree is not None:
             module = tree.name.name if tree.name is not None and tree.kind == "module" else ""
-            _check_header(tree, source, is_root, diags)
+            if not (is_root and as_module and tree.kind == "module"):
+                _check_header(tree, source, is_root, diags)
         files.append(LoadedFile(source, tree, module, is_root))
         if tree is None:
             return
