@@ -621,7 +621,14 @@ COMMANDS: dict[str, Command] = {
 }
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser; with `only`, just that command's options are added.
+
+    Adding a command's options may import what the command uses (graph views,
+    build targets), so a run builds the options of its own command alone:
+    `rcsc --version` and `rcsc explain` then load neither the checks nor z3,
+    networkx or jinja2.  `rcsc completion` builds the whole tree.
+    """
     parser = argparse.ArgumentParser(
         prog="rcsc",
         description="A compiler and checker for NIST RCS real-time control designs.",
@@ -632,9 +639,20 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name, command in COMMANDS.items():
         p = sub.add_parser(name, help=command.help, description=command.help, allow_abbrev=False)
-        command.add_arguments(p)
+        if only is None or name == only:
+            command.add_arguments(p)
         p.set_defaults(run=command.run)
     return parser
+
+
+def _command_in(argv: list[str]) -> str | None:
+    """The command word of `argv` (its first word that is not an option)."""
+    for word in argv:
+        if word == "--":
+            return None
+        if not word.startswith("-"):
+            return word if word in COMMANDS else None
+    return None
 
 
 def _silence_stdout() -> None:
@@ -648,7 +666,11 @@ def _silence_stdout() -> None:
 
 
 def _main(argv: list[str] | None) -> int:
-    args = build_parser().parse_args(argv)
+    if argv is None:
+        argv = sys.argv[1:]
+    command = _command_in(argv)
+    # Without a known command word argparse only prints usage or the version.
+    args = build_parser(command or "").parse_args(argv)
     code = args.run(args)
     sys.stdout.flush()  # a broken pipe surfaces here, inside the handlers
     return code
