@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath, PureWindowsPath
 from urllib.parse import quote
 
-from rcsc.codes import CODES, Code
+from rcsc.codes import CODES, DOCS_URL, Code, help_uri
 from rcsc.diagnostics import Diagnostic, Diagnostics, Severity
 from rcsc.source import SourceFile, Span
 
@@ -40,9 +40,9 @@ JSON_FORMAT_VERSION = 1
 
 SARIF_VERSION = "2.1.0"
 SARIF_SCHEMA_URI = "https://json.schemastore.org/sarif-2.1.0.json"
-# The project has no public home page yet.  SARIF requires informationUri to be
-# an absolute URI when present, so it is left out until there is a real one.
-INFORMATION_URI: str | None = None
+# The tool's documentation (SARIF requires an absolute URI); each rule's helpUri
+# is `codes.help_uri(code)` below it.
+INFORMATION_URI: str | None = DOCS_URL
 # Named and versioned as SARIF recommends, so that a future change of the
 # hashed fields can use a new key instead of silently re-keying every finding.
 FINGERPRINT_KEY = "rcscFinding/v1"
@@ -490,6 +490,7 @@ def _sarif_rule(code: Code) -> dict:
             "text": f"{explanation}\n\nrun `rcsc explain {code.code}` to read this in a terminal.",
             "markdown": f"**{code.code}: {code.title}**\n\n{explanation}",
         },
+        "helpUri": help_uri(code.code),
         "defaultConfiguration": {"level": _SARIF_LEVEL[code.severity]},
     }
 

@@ -244,3 +244,19 @@ def test_explicit_module_in_a_folder_outside_cwd(tmp_path, monkeypatch, capsys) 
     # The importing design is in an ancestor folder that is not searched: the
     # module is checked on its own and its own error is still found.
     assert rc == 1 and any("E0200" in line for line in lines)
+
+
+def test_junit_reports_a_design_error_as_error_with_its_diagnostic(tmp_path, monkeypatch, capsys) -> None:
+    import xml.etree.ElementTree as ET
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "d.rcs").write_text(DESIGN.format(name="d", imports="").replace("gm spare: i32 = 0", "gm spare: i32 = nope"))
+    (tmp_path / "s.scn").write_text("cycles 2\n")
+    assert cli.main(["test", ".", "--junit", "r.xml"]) == 1
+    capsys.readouterr()
+    root = ET.parse(tmp_path / "r.xml").getroot()
+    assert (root.get("failures"), root.get("errors")) == ("0", "1")
+    error = root.find("./testsuite/testcase/error")
+    assert error is not None and root.find("./testsuite/testcase/failure") is None
+    assert error.get("message") == "./d.rcs:3:17: error[E0100]: cannot find `nope` in this scope"
+    assert "the design has errors" in error.text and "error[E0100]" in error.text
