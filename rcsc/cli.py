@@ -598,6 +598,21 @@ def _run_targets(args: argparse.Namespace) -> int:
 
 
 # ---------------------------------------------------------------------------
+# rcsc completion
+# ---------------------------------------------------------------------------
+
+def _add_completion_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("shell", choices=("bash", "zsh", "fish"), help="the shell to write the script for")
+
+
+def _run_completion(args: argparse.Namespace) -> int:
+    from rcsc import completion
+
+    _write(sys.stdout, completion.script(args.shell, build_parser()))
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------
 # the command table and the parser
 # ---------------------------------------------------------------------------
 
@@ -618,6 +633,7 @@ COMMANDS: dict[str, Command] = {
     "doc": Command("write a one-page HTML description of a design", _add_doc_arguments, _run_doc),
     "build": Command("generate code for a target (`rcsc targets`) after every check passes", _add_build_arguments, _run_build),
     "targets": Command("list the code-generation targets", _add_targets_arguments, _run_targets),
+    "completion": Command("print a shell completion script (bash, zsh or fish)", _add_completion_arguments, _run_completion),
 }
 
 
