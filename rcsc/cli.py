@@ -598,6 +598,82 @@ def _run_targets(args: argparse.Namespace) -> int:
 
 
 # ---------------------------------------------------------------------------
+# rcsc fmt
+# ---------------------------------------------------------------------------
+
+def _add_fmt_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("paths", metavar="PATH", nargs="+", help="files, folders (searched for *.rcs) or glob patterns; `-` formats stdin to stdout")
+    p.add_argument("--check", action="store_true", help="change nothing; exit with 1 if a file is not formatted")
+    p.add_argument("--diff", action="store_true", help="change nothing; print a unified diff of what would change")
+    p.add_argument("-q", "--quiet", action="store_true", help="no summary line")
+
+
+def _run_fmt(args: argparse.Namespace) -> int:
+    import difflib
+    import stat
+
+    from rcsc import config as cfg
+    from rcsc import fmt, workspace
+
+    if args.paths == ["-"]:
+        text = sys.stdin.read()
+        formatted, diags = fmt.format_source("<stdin>", text)
+        if formatted is None:
+            _report_to_stderr(diags)
+            return EXIT_FINDINGS
+        _write(sys.stdout, formatted)
+        return EXIT_OK
+    expanded = workspace.expand(args.paths)
+    for problem in expanded.problems:
+        _error(problem)
+    explicit = {os.path.realpath(p) for p in args.paths if os.path.isfile(p)}
+    code = EXIT_USAGE if expanded.problems else EXIT_OK
+    changed = unchanged = 0
+    for path in expanded.files:
+        if os.path.realpath(path) not in explicit:
+            found = cfg.find(path)
+            if found and cfg.load(found[0], found[1], Diagnostics()).excluded(path):
+                continue
+        try:
+            raw = safeio.read_input(path)
+            text = raw.decode("utf-8")
+        except (OSError, safeio.InputError, UnicodeDecodeError) as exc:
+            _error(f"{path}: cannot read: {getattr(exc, 'strerror', None) or exc}")
+            code = EXIT_USAGE
+            continue
+        formatted, diags = fmt.format_source(path, text)
+        if formatted is None:
+            _report_to_stderr(diags)
+            code = max(code, EXIT_FINDINGS) if code != EXIT_USAGE else code
+            continue
+        if formatted == text:
+            unchanged += 1
+            continue
+        changed += 1
+        if args.diff:
+            diff = difflib.unified_diff(
+                text.splitlines(keepends=True), formatted.splitlines(keepends=True),
+                *((path, path) if os.path.isabs(path) else (f"a/{path}", f"b/{path}")),
+            )
+            _write(sys.stdout, render.escape_controls("".join(diff)))
+        if args.check or args.diff:
+            if args.check:
+                _write(sys.stderr, f"would reformat {render.escape_controls(path)}\n")
+                code = max(code, EXIT_FINDINGS) if code != EXIT_USAGE else code
+            continue
+        try:
+            mode = stat.S_IMODE(os.stat(path).st_mode)
+            safeio.write_file(path, formatted.encode("utf-8"), may_replace=lambda _p: True, mode=mode)
+        except OSError as exc:
+            _error(f"cannot write `{path}`: {exc.strerror or exc}")
+            code = EXIT_USAGE
+    if not args.quiet:
+        verb = "would be reformatted" if (args.check or args.diff) else "reformatted"
+        _write(sys.stderr, f"{changed} file{'s' if changed != 1 else ''} {verb}, {unchanged} unchanged\n")
+    return code
+
+
+# ---------------------------------------------------------------------------
 # rcsc completion
 # ---------------------------------------------------------------------------
 
@@ -633,6 +709,7 @@ COMMANDS: dict[str, Command] = {
     "doc": Command("write a one-page HTML description of a design", _add_doc_arguments, _run_doc),
     "build": Command("generate code for a target (`rcsc targets`) after every check passes", _add_build_arguments, _run_build),
     "targets": Command("list the code-generation targets", _add_targets_arguments, _run_targets),
+    "fmt": Command("format design files: state tables in aligned columns, comments kept", _add_fmt_arguments, _run_fmt),
     "completion": Command("print a shell completion script (bash, zsh or fish)", _add_completion_arguments, _run_completion),
 }
 
