@@ -783,6 +783,10 @@ def main(argv: list[str] | None = None) -> int:
         _error(str(exc))
         return EXIT_USAGE
     except KeyboardInterrupt:
+        # An interrupt can land inside a library's constructor (z3's Context);
+        # the half-built object's finalizer then fails at exit, printing
+        # "Exception ignored ... Traceback".  After Ctrl-C that is noise.
+        sys.unraisablehook = lambda _unraisable: None
         _write(sys.stderr, "\nerror: interrupted\n")
         return EXIT_INTERRUPTED
     except BrokenPipeError:

@@ -30,24 +30,25 @@ class CheckResult:
         return not self.diags.has_errors()
 
 
-def check_path(path: str, as_module: bool = False) -> CheckResult:
+def check_path(path: str, as_module: bool = False, overlay: dict[str, str] | None = None) -> CheckResult:
     """Load, analyse and check the design whose root file is `path` (or, with
-    `as_module`, the module `path` on its own)."""
+    `as_module`, the module `path` on its own); `overlay` gives texts that
+    replace files on disk (see `loader.path_to_files`)."""
     # A compiler run allocates many long-lived objects and frees few: the
     # cyclic garbage collector would spend about half of a large design's
     # check time scanning them for nothing, so it pauses for the run.
     was_enabled = gc.isenabled()
     gc.disable()
     try:
-        return _check_path(path, as_module)
+        return _check_path(path, as_module, overlay)
     finally:
         if was_enabled:
             gc.enable()
 
 
-def _check_path(path: str, as_module: bool) -> CheckResult:
+def _check_path(path: str, as_module: bool, overlay: dict[str, str] | None) -> CheckResult:
     diags = Diagnostics()
-    files = path_to_files(path, diags, as_module)
+    files = path_to_files(path, diags, as_module, overlay)
     if any(f.tree is None for f in files):
         # A file that does not parse leaves holes that would only produce
         # follow-on findings; report the syntax errors alone.

@@ -55,13 +55,20 @@ def stdlib_path(module: str):
     return node if node.is_file() else None
 
 
-def path_to_files(path: str, diags: Diagnostics, as_module: bool = False) -> list[LoadedFile]:
+def path_to_files(
+    path: str, diags: Diagnostics, as_module: bool = False, overlay: dict[str, str] | None = None
+) -> list[LoadedFile]:
     """Read and parse the root design file and, transitively, its imports.
 
     With `as_module`, the root may also be a `module` (checked on its own,
-    as `rcsc check` does for a module that no design imports)."""
+    as `rcsc check` does for a module that no design imports).  `overlay`
+    maps real paths to texts that replace the files' contents (the unsaved
+    documents of an editor, for the language server)."""
+    overlay = overlay or {}
     try:
-        text = _read(path)
+        text = overlay.get(os.path.realpath(path))
+        if text is None:
+            text = _read(path)
     except FileNotFoundError as exc:
         raise InputError(f"{path}: no such file") from exc
     except IsADirectoryError as exc:
@@ -111,7 +118,7 @@ def path_to_files(path: str, diags: Diagnostics, as_module: bool = False) -> lis
         if real in seen:
             return
         try:
-            text = _read(real)
+            text = overlay[real] if real in overlay else _read(real)
         except InputError as exc:
             diags.add("E0003", _target_span(item), f"cannot read `{target}`: {exc}", "imported here")
             return
