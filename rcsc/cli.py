@@ -674,6 +674,22 @@ def _run_fmt(args: argparse.Namespace) -> int:
 
 
 # ---------------------------------------------------------------------------
+# rcsc lsp
+# ---------------------------------------------------------------------------
+
+def _add_lsp_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--stdio", action="store_true", help="talk over stdin/stdout (the default and only transport)")
+
+
+def _run_lsp(args: argparse.Namespace) -> int:
+    try:
+        from rcsc import lsp
+    except ImportError as exc:
+        raise UsageError(f"the language server needs pygls: pip install 'rcsc[lsp]' ({exc})") from exc
+    return lsp.main()
+
+
+# ---------------------------------------------------------------------------
 # rcsc completion
 # ---------------------------------------------------------------------------
 
@@ -710,6 +726,7 @@ COMMANDS: dict[str, Command] = {
     "build": Command("generate code for a target (`rcsc targets`) after every check passes", _add_build_arguments, _run_build),
     "targets": Command("list the code-generation targets", _add_targets_arguments, _run_targets),
     "fmt": Command("format design files: state tables in aligned columns, comments kept", _add_fmt_arguments, _run_fmt),
+    "lsp": Command("run the language server on stdin/stdout (needs `pip install 'rcsc[lsp]'`)", _add_lsp_arguments, _run_lsp),
     "completion": Command("print a shell completion script (bash, zsh or fish)", _add_completion_arguments, _run_completion),
 }
 
@@ -765,7 +782,8 @@ def _main(argv: list[str] | None) -> int:
     # Without a known command word argparse only prints usage or the version.
     args = build_parser(command or "").parse_args(argv)
     code = args.run(args)
-    sys.stdout.flush()  # a broken pipe surfaces here, inside the handlers
+    if not sys.stdout.closed:  # the language server closes it on `exit`
+        sys.stdout.flush()  # a broken pipe surfaces here, inside the handlers
     return code
 
 

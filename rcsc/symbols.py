@@ -192,6 +192,9 @@ def lookup(idx: Index, source: SourceFile, offset: int) -> Symbol | None:
             verb = idx.members.get(controller, {}).get(plan.name.name)
             return verb
         return None
+    for _, _, psym in idx.plans:  # a plan's own name (a verb's name elsewhere)
+        if psym.span.file.path == source.path and psym.span.start == start:
+            return psym
     if plan is not None:
         for rule in plan.rules:
             in_state = rule.state.span.start <= start < rule.state.span.end

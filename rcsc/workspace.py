@@ -84,7 +84,12 @@ def header_kind(path: str) -> str | None:
             head = f.read(65536)
     except OSError:
         return None
-    text = head.decode("utf-8", "replace").lstrip("\ufeff")
+    return header_kind_text(head.decode("utf-8", "replace"))
+
+
+def header_kind_text(text: str) -> str | None:
+    """`design`, `module` or None, from the first word of `text`."""
+    text = text.lstrip("\ufeff")
     i = skip_trivia(text, 0)
     for kind in ("design", "module"):
         if text.startswith(kind, i) and (len(text) == i + len(kind) or not (text[i + len(kind)].isalnum() or text[i + len(kind)] == "_")):
