@@ -29,7 +29,7 @@ def main() -> int:
     sys.path.insert(0, str(ROOT))
     from rcsc import driver
 
-    print(f"{"example":<44} {'median ms':>10} {'goal ms':>8}")
+    print(f"{'example':<44} {'median ms':>10} {'goal ms':>8}")
     for path in EXAMPLES:
         text = path.read_text(encoding="utf-8")
         driver.check_path(str(path))  # warm: grammar built, modules imported
