@@ -716,7 +716,7 @@ class Command:
 
 
 COMMANDS: dict[str, Command] = {
-    "check": Command("check a design and report findings", _add_check_arguments, _run_check),
+    "check": Command("check designs (files, folders, globs) and report findings", _add_check_arguments, _run_check),
     "explain": Command("explain a diagnostic code", _add_explain_arguments, _run_explain),
     "sim": Command("run a scenario in the reference simulator and write its trace", _add_sim_arguments, _run_sim),
     "test": Command("run scenarios with expectations, like a test runner", _add_test_arguments, _run_test),
