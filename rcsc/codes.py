@@ -67,7 +67,7 @@ deep (for example a sum of hundreds of terms written on one line). rcsc refuses
 it rather than risk running out of stack in later passes. Compute parts of the
 expression in locals or move them into functions.
 """),
-    ("E0008", _E, "invalid configuration", """
+    ("E0009", _E, "invalid configuration", """
 The configuration file (`rcsc.toml`, or the `[tool.rcsc]` table of a
 `pyproject.toml`, the first one found walking up from the checked file) has a
 mistake: it is not valid TOML, it has a key rcsc does not know, a value of the

@@ -15,7 +15,7 @@ folder).  Keys (docs/configuration.md):
 Only warnings (W-codes) can be left out or have their severity changed: an
 error means the design is wrong, and every command that uses the design (sim,
 build) refuses it whatever a report shows.  A mistake in the configuration
-(unknown key, wrong type, unknown code, TOML syntax) is an E0008 finding with
+(unknown key, wrong type, unknown code, TOML syntax) is an E0009 finding with
 a span inside the TOML file, reported with the design's own findings.
 """
 
@@ -136,13 +136,13 @@ def load(path: str, in_pyproject: bool, diags: Diagnostics) -> Config:
             data = f.read()
         text = data.decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        diags.add("E0008", None, f"cannot read the configuration `{path}`: {getattr(exc, 'strerror', None) or exc}")
+        diags.add("E0009", None, f"cannot read the configuration `{path}`: {getattr(exc, 'strerror', None) or exc}")
         return config
     source = SourceFile(path, text)
     try:
         doc = tomllib.loads(source.text)
     except tomllib.TOMLDecodeError as exc:
-        diags.add("E0008", _error_span(source, str(exc)), f"the configuration is not valid TOML: {_strip_position(str(exc))}", "here")
+        diags.add("E0009", _error_span(source, str(exc)), f"the configuration is not valid TOML: {_strip_position(str(exc))}", "here")
         return config
     table: object = doc
     section = ""
@@ -150,7 +150,7 @@ def load(path: str, in_pyproject: bool, diags: Diagnostics) -> Config:
         table = doc.get("tool", {}).get("rcsc", {})
         section = "tool.rcsc"
     if not isinstance(table, dict):
-        diags.add("E0008", _key_span(source, section, ""), "`[tool.rcsc]` must be a table", "not a table")
+        diags.add("E0009", _key_span(source, section, ""), "`[tool.rcsc]` must be a table", "not a table")
         return config
     _read_table(table, config, source, section, diags)
     return config
@@ -159,11 +159,11 @@ def load(path: str, in_pyproject: bool, diags: Diagnostics) -> Config:
 def _read_table(table: dict, config: Config, source: SourceFile, section: str, diags: Diagnostics) -> None:
     def bad(key: str, message: str, label: str, sub: str = "") -> None:
         sec = f"{section}.{key}".strip(".") if sub else section
-        diags.add("E0008", _key_span(source, sec, sub or key), message, label)
+        diags.add("E0009", _key_span(source, sec, sub or key), message, label)
 
     for key, value in table.items():
         if key not in KEYS:
-            d = diags.add("E0008", _key_span(source, section, key), f"unknown configuration key `{key}`", "unknown key")
+            d = diags.add("E0009", _key_span(source, section, key), f"unknown configuration key `{key}`", "unknown key")
             d.with_note("the keys are: " + ", ".join(KEYS))
             continue
         if key in ("select", "ignore", "exclude"):
@@ -208,11 +208,11 @@ def _codes(values: list[str], key: str, source: SourceFile, section: str, diags:
     for v in values:
         span = _value_span(source, v)
         if not _CODE_PREFIX.fullmatch(v) or not any(c.startswith(v) for c in CODES):
-            diags.add("E0008", span, f"`{v}` in `{key}` is not a diagnostic code or a prefix of one", "unknown code").with_help(
+            diags.add("E0009", span, f"`{v}` in `{key}` is not a diagnostic code or a prefix of one", "unknown code").with_help(
                 "`rcsc explain --list` lists the codes"
             )
         elif key != "select" and v.startswith("E"):
-            diags.add("E0008", span, f"errors cannot be ignored (`{v}` in `{key}`)", "an error code").with_note(
+            diags.add("E0009", span, f"errors cannot be ignored (`{v}` in `{key}`)", "an error code").with_note(
                 "an error means the design is wrong; only warnings (W-codes) can be left out of a report"
             )
         else:

@@ -157,12 +157,12 @@ def test_config_mistakes_are_findings_with_spans_not_tracebacks(tmp_path, monkey
     (proj / "rcsc.toml").write_text('select = "W"\nignore = [\n')
     rc, lines, err = _short(["proj/b.rcs"], capsys)
     assert rc == 1 and err == ""
-    assert any(line.startswith("proj/rcsc.toml:3:1: error[E0008]: the configuration is not valid TOML") for line in lines)
+    assert any(line.startswith("proj/rcsc.toml:3:1: error[E0009]: the configuration is not valid TOML") for line in lines)
     (proj / "rcsc.toml").write_text('select = "W"\n[per-file-ignores]\n"x" = [1]\n')
     rc, lines, _ = _short(["proj/b.rcs"], capsys)
     assert [line for line in lines if "rcsc.toml" in line] == [
-        "proj/rcsc.toml:1:1: error[E0008]: `select` must be a list of strings",
-        'proj/rcsc.toml:3:1: error[E0008]: `per-file-ignores."x"` must be a list of codes',
+        "proj/rcsc.toml:1:1: error[E0009]: `select` must be a list of strings",
+        'proj/rcsc.toml:3:1: error[E0009]: `per-file-ignores."x"` must be a list of codes',
     ]
 
 
