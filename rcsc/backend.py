@@ -380,6 +380,19 @@ class Target:
             d.with_label(cpus[0].name_span, "first CPU")
             d.with_note("exchanging buffers between CPUs needs a transport, which no target has yet")
 
+    # ---- comments ------------------------------------------------------------------
+
+    @staticmethod
+    def comment(text: str) -> str:
+        """Design text made safe for a one-line comment of the target's language.
+        Every comment built from design text (a rule's guard, a file name) goes
+        through it; each target defines it once."""
+        raise NotImplementedError
+
+    def where_text(self, span: Span) -> str:
+        """`where(span)` made safe for a comment (a file name can hold anything)."""
+        return self.comment(where(span))
+
     # ---- output --------------------------------------------------------------------
 
     def files(self) -> list[OutFile]:

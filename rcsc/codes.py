@@ -67,6 +67,15 @@ deep (for example a sum of hundreds of terms written on one line). rcsc refuses
 it rather than risk running out of stack in later passes. Compute parts of the
 expression in locals or move them into functions.
 """),
+    ("E0008", _E, "bidirectional control character", """
+The text contains a Unicode bidirectional control character (U+202A to U+202E,
+U+2066 to U+2069, U+200E, U+200F or U+061C), in a comment, a string or anywhere
+else. These characters change the order in which an editor or a code review
+displays the text around them, so a design can show one thing and mean another
+(the "trojan source" attack, CVE-2021-42574): a condition that looks commented
+out, a comment that seems to end early. rcsc refuses them wherever they stand;
+delete them. Other non-ASCII text is allowed in comments.
+"""),
     ("E0009", _E, "invalid configuration", """
 The configuration file (`rcsc.toml`, or the `[tool.rcsc]` table of a
 `pyproject.toml`, the first one found walking up from the checked file) has a

@@ -10,6 +10,7 @@ the way an engineer reads them.
 from __future__ import annotations
 
 import math
+import unicodedata
 from fractions import Fraction
 from functools import lru_cache
 from importlib import resources
@@ -19,7 +20,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from rcsc import ast
 from rcsc.diagnostics import Diagnostics
-from rcsc.source import SourceFile, Span
+from rcsc.source import BIDI_CONTROLS, SourceFile, Span
 
 UNIT_NANOS = {"us": 1_000, "ms": 1_000_000, "s": 1_000_000_000}
 
@@ -550,9 +551,22 @@ def text_to_ast(source: SourceFile, diags: Diagnostics) -> ast.File | None:
     return parse_with(_parser(), _ToAst, source, diags)
 
 
+def check_bidi(source: SourceFile, diags: Diagnostics) -> None:
+    """E0008 for each bidirectional control character of `source`, comments and strings included."""
+    for pos, ch in enumerate(source.text):
+        if ch in BIDI_CONTROLS:
+            name = unicodedata.name(ch, "BIDIRECTIONAL CONTROL")
+            diag = diags.add("E0008", Span(source, pos, pos + 1), f"bidirectional control character U+{ord(ch):04X} ({name})",
+                             "changes how the text around it is displayed")
+            diag.with_note("what an editor shows here may differ from what rcsc reads (\"trojan source\")")
+            diag.with_help("delete the character; the language needs no text direction marks")
+
+
 def parse_with(parser: Lark, builder_class: type, source: SourceFile, diags: Diagnostics):
     """Parse `source` with `parser` and build the result with `builder_class`
-    (a `_ToAst`); None after a syntax error or a too-deep nesting (E0007)."""
+    (a `_ToAst`); None after a syntax error or a too-deep nesting (E0007).
+    Bidirectional control characters are reported (E0008) before parsing."""
+    check_bidi(source, diags)
     try:
         tree = parser.parse(source.text)
     except UnexpectedInput as exc:
@@ -575,6 +589,8 @@ def _syntax_error(parser: Lark, source: SourceFile, exc: UnexpectedInput, diags:
         if ch == '"':
             diags.add("E0002", Span(source, pos, min(len(text), pos + 1)), "unterminated string", "this quote is never closed")
             return
+        if ch in BIDI_CONTROLS:
+            return  # already reported (E0008)
         shown = repr(ch)[1:-1] if ch.isprintable() else f"\\u{ord(ch):04x}"
         diag = diags.add("E0002", Span(source, pos, pos + 1), f"unexpected character `{shown}`", "not part of the language")
         expected = _describe_expected(parser, set(exc.allowed or ()))

@@ -31,7 +31,7 @@ from urllib.parse import quote
 
 from rcsc.codes import CODES, DOCS_URL, Code, help_uri
 from rcsc.diagnostics import Diagnostic, Diagnostics, Severity
-from rcsc.source import SourceFile, Span
+from rcsc.source import BIDI_CONTROLS, SourceFile, Span
 
 # A tab is shown as this many spaces; carets are moved to match.
 TAB_WIDTH = 4
@@ -154,11 +154,6 @@ def _char_width(ch: str) -> int:
     return 1
 
 
-# Characters that reorder text (the "trojan source" controls) are shown as
-# escapes like control characters: a report must read as it is stored.
-BIDI_CONTROLS = frozenset("\u061c\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
-
-
 def escape_controls(text: str) -> str:
     """`text` for a terminal or log: newlines and tabs kept, every other
     control character (C0, DEL, C1) and every bidirectional control shown as
@@ -176,8 +171,9 @@ def escape_controls(text: str) -> str:
 def _display_char(ch: str) -> str:
     if ch == "\t":
         return " " * TAB_WIDTH
-    # Control characters in a broken input must not drive the terminal.
-    if unicodedata.category(ch) == "Cc":
+    # Control characters in a broken input must not drive the terminal, nor
+    # bidirectional controls reorder the line shown.
+    if unicodedata.category(ch) == "Cc" or ch in BIDI_CONTROLS:
         return "\ufffd"
     return ch
 

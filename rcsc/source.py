@@ -14,6 +14,13 @@ from dataclasses import dataclass, field
 
 _LONE_CR = re.compile("\r(?!\n)")
 
+# Characters that reorder how the text around them is displayed (Unicode
+# bidirectional embeddings, overrides, isolates and marks).  In a comment or a
+# string they can make a design read differently from what it means ("trojan
+# source", CVE-2021-42574): the parser refuses them wherever they stand
+# (E0008) and the diagnostics never print them.
+BIDI_CONTROLS = frozenset("\u061c\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
+
 
 @dataclass(eq=False)
 class SourceFile:

@@ -35,6 +35,7 @@ from rcsc.types import (
 
 BUILTIN_FUNCS = {"abs": 1, "min": 2, "max": 2}
 CONVERSIONS = {"i32", "i64", "u32", "f64"}
+ARITH_OPS = ("+", "-", "*", "/", "%")
 
 
 @dataclass
@@ -77,6 +78,27 @@ class FoldEnv(Env):
         if fn.body is None:  # not checked yet (a call in a constant before pass 5) or being checked
             raise NotConstant(None)  # type: ignore[arg-type]
         return fn
+
+
+def _literal_values(node: ast.Expr):
+    """The integer literals of an untyped expression (`Checker._untyped`), with the
+    sign of a `-` written on one (`-2147483648` fits in `i32`)."""
+    if isinstance(node, ast.IntLit):
+        yield node.value
+    elif isinstance(node, ast.Unary):
+        if isinstance(node.operand, ast.IntLit):
+            yield -node.operand.value
+        else:
+            yield from _literal_values(node.operand)
+    elif isinstance(node, ast.Binary):
+        yield from _literal_values(node.left)
+        yield from _literal_values(node.right)
+    elif isinstance(node, ast.IfExpr):
+        yield from _literal_values(node.then)
+        yield from _literal_values(node.else_)
+    elif isinstance(node, ast.Call):
+        for arg in node.args:
+            yield from _literal_values(arg.value)
 
 
 def describe(t: Type) -> str:
@@ -324,7 +346,45 @@ class Checker:
         return self.fold(m.Unary(node.span, t, "-", operand))
 
     def _untyped(self, node: ast.Expr) -> bool:
-        return isinstance(node, ast.IntLit) or (isinstance(node, ast.Unary) and node.op == "-" and isinstance(node.operand, ast.IntLit))
+        """Whether `node` is made of integer literals only (`5`, `-5`, `5 + 1`, `abs(5)`,
+        `if c then 1 else 2`): such an expression has no type of its own and takes
+        the one its context gives it (see `together`)."""
+        if isinstance(node, ast.IntLit):
+            return True
+        if isinstance(node, ast.Unary):
+            return node.op == "-" and self._untyped(node.operand)
+        if isinstance(node, ast.Binary):
+            return node.op in ARITH_OPS and self._untyped(node.left) and self._untyped(node.right)
+        if isinstance(node, ast.IfExpr):
+            return self._untyped(node.then) and self._untyped(node.else_)
+        if isinstance(node, ast.Call):
+            name = node.func.name
+            return (name in BUILTIN_FUNCS and name not in self.g.functions and len(node.args) == BUILTIN_FUNCS[name]
+                    and all(self._untyped(a.value) for a in node.args))
+        return False
+
+    def together(self, nodes: list[ast.Expr], hint: Type | None) -> list[m.Expr]:
+        """Check operands that must have one type (the two sides of an operator, the
+        branches of an `if`, the arguments of `abs`/`min`/`max`): the language's one
+        rule for untyped integer literals.  The typed operands are checked first, in
+        order, each expecting the type of the first; then every untyped operand is
+        checked expecting that type, or `hint` (the context's type) when no operand
+        is typed.  So `A > 5 + 1`, `5 + 1 < A` and `abs(5) == A` type alike."""
+        out: dict[int, m.Expr] = {}
+        t = hint
+        if t is None and all(self._untyped(n) for n in nodes):
+            # No type anywhere: the literals' own default, i32, or i64 if one does not fit.
+            t = I32 if all(I32.min <= v <= I32.max for n in nodes for v in _literal_values(n)) else I64
+        first = True
+        for i, n in enumerate(nodes):
+            if not self._untyped(n):
+                out[i] = self.expr(n, t)
+                if first:
+                    t, first = out[i].type, False
+        for i, n in enumerate(nodes):
+            if i not in out:
+                out[i] = self.expr(n, t)
+        return [out[i] for i in range(len(nodes))]
 
     def e_Binary(self, node: ast.Binary, expected: Type | None) -> m.Expr:
         op = node.op
@@ -332,14 +392,9 @@ class Checker:
             left = self.expect(node.left, BOOL, f"`{op}` needs `bool` operands")
             right = self.expect(node.right, BOOL, f"`{op}` needs `bool` operands")
             return self.fold(m.Binary(node.span, BOOL, op, left, right))
-        arith = op in ("+", "-", "*", "/", "%")
+        arith = op in ARITH_OPS
         hint = expected if arith else None
-        if self._untyped(node.left) and not self._untyped(node.right):
-            right = self.expr(node.right, hint)
-            left = self.expr(node.left, right.type)
-        else:
-            left = self.expr(node.left, hint)
-            right = self.expr(node.right, left.type)
+        left, right = self.together([node.left, node.right], hint)
         lt, rt = left.type, right.type
         if isinstance(lt, ErrorType) or isinstance(rt, ErrorType):
             return m.Const(node.span, ERROR, 0)
@@ -370,12 +425,7 @@ class Checker:
 
     def e_IfExpr(self, node: ast.IfExpr, expected: Type | None) -> m.Expr:
         cond = self.condition(node.cond)
-        if self._untyped(node.then) and not self._untyped(node.else_):
-            else_ = self.expr(node.else_, expected)
-            then = self.expr(node.then, else_.type)
-        else:
-            then = self.expr(node.then, expected)
-            else_ = self.expr(node.else_, then.type)
+        then, else_ = self.together([node.then, node.else_], expected)
         if not compatible(then.type, else_.type):
             diag = self.d.add("E0200", node.else_.span, f"`if` branches differ: `{then.type}` and `{else_.type}`", f"`{else_.type}`")
             diag.with_label(node.then.span, f"`{then.type}`")
@@ -412,15 +462,6 @@ class Checker:
             types = {a.type for a in args}
             if any(isinstance(t, ErrorType) for t in types):
                 return m.Const(node.span, ERROR, 0)
-            literals = {a.value.span: a.value for a in node.args if self._untyped(a.value)}
-            typed = {a.type for a in args if a.span not in literals}
-            if len(types) != 1 and len(typed) == 1:
-                # `max(x, 1)` with x: f64: the integer literal takes the other argument's type.
-                t = next(iter(typed))
-                args = [self.expr(literals[a.span], t) if a.span in literals else a for a in args]
-                types = {a.type for a in args}
-                if any(isinstance(t, ErrorType) for t in types):
-                    return m.Const(node.span, ERROR, 0)
             if len(types) != 1:
                 self.d.add("E0200", node.span, f"`{name}` needs arguments of one type", "different types")
                 return m.Const(node.span, ERROR, 0)
@@ -492,14 +533,16 @@ class Checker:
             return None
         if not ok:
             return None
-        out: list[m.Expr] = []
-        for (pname, ptype), a in zip(params, slots):
+        out: dict[int, m.Expr] = {}
+        free = []  # parameters of no fixed type (builtins): their arguments take one type
+        for i, ((pname, ptype), a) in enumerate(zip(params, slots)):
             assert a is not None
             if ptype is None:
-                out.append(self.expr(a.value, hint))
+                free.append(i)
             else:
-                out.append(self.expect(a.value, ptype, f"argument `{pname}`"))
-        return out
+                out[i] = self.expect(a.value, ptype, f"argument `{pname}`")
+        out.update(zip(free, self.together([slots[i].value for i in free], hint)))  # type: ignore[union-attr]
+        return [out[i] for i in range(len(params))]
 
     # ---- statements ------------------------------------------------------------
 

@@ -56,6 +56,11 @@ def _examples() -> list[tuple[Path, Path]]:
     # Every numeric type and conversion, records everywhere, target-language
     # keywords as names, names long enough to force line breaks.
     pairs.append((ROOT / "tests/stress/stress.rcs", ROOT / "tests/stress/stress.scn"))
+    # Literals the target language would type by inference, design comments
+    # quoted in the rule comments, records and controllers with nothing in them.
+    pairs.append((ROOT / "tests/edge/edge.rcs", ROOT / "tests/edge/edge.scn"))
+    # Nothing optional: no Global Memory, types, constants or functions.
+    pairs.append((ROOT / "tests/bare/bare.rcs", ROOT / "tests/bare/bare.scn"))
     return pairs
 
 

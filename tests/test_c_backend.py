@@ -224,32 +224,3 @@ def test_deployment_build_leaves_out_the_simulators(tmp_path: Path) -> None:
     proc = subprocess.run([str(exe), "--fast", "--no-console", "--no-timing", "--cycles", "5", "--trace", "-"], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     assert len(proc.stdout.splitlines()) == 5
-
-
-def test_a_design_without_global_memory_or_plans_builds_and_runs(tmp_path: Path) -> None:
-    """Empty tables (no GM, no enums, no constants, a simulator without verbs or plans) are valid C99."""
-    from c_build import compile_c
-
-    design = tmp_path / "bare.rcs"
-    design.write_text(
-        "design bare\n"
-        "controller TOP level 2 budget 1 ms {\n    subordinates LOW\n    verb GO\n"
-        "    plan GO {\n        G0: true | new -> S1 | LOW.RUN();\n        G1: LOW.done | S1 -> done;\n        G2: LOW.error | S1 -> error(1);\n    }\n}\n"
-        "controller LOW level 1 budget 1 ms {\n    verb RUN\n    plan RUN { R0: true | new -> error(7); }\n}\n"
-        "simulator SIM level 0 budget 100 us {\n}\n"
-        "cpu MAIN {\n    heartbeat 10 ms\n    schedule SIM, TOP, LOW\n}\n",
-        encoding="utf-8",
-    )
-    scn = tmp_path / "go.scn"
-    scn.write_text("cycles 3\nat 1: TOP.GO()\n", encoding="utf-8")
-    out = tmp_path / "out"
-    generate(design, "c", out)
-    for cc in ("gcc", "clang"):
-        exe = tmp_path / f"bare-{cc}"
-        compile_c(out, cc, ["-O2"], exe)
-        trace = tmp_path / f"{cc}.jsonl"
-        proc = run_main(exe, scn, trace)
-        assert proc.returncode == 0, proc.stderr
-        assert trace.read_bytes() == reference_trace(design, scn)
-    # LOW fails at once with error(7); TOP sees it the next cycle and fails with error(1).
-    assert '"TOP":{"echo":1,"status":"ERROR","verb":"GO","state":"error","rule":"G2","error_code":1' in trace.read_text().splitlines()[-1]

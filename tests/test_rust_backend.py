@@ -26,8 +26,10 @@ from c_build import CONFORMANCE, ROOT, RUST_PROFILES, Builds, case_id, cargo_bui
 SUBMARINE = ROOT / "examples/submarine/submarine.rcs"
 CELL = ROOT / "examples/machining_cell/machining_cell.rcs"
 STRESS = ROOT / "tests/stress/stress.rcs"
+EDGE = ROOT / "tests/edge/edge.rcs"
+BARE = ROOT / "tests/bare/bare.rcs"
 PAIRS = CONFORMANCE
-CRATES = [SUBMARINE, CELL, STRESS]
+CRATES = [SUBMARINE, CELL, STRESS, EDGE, BARE]
 
 
 

@@ -21,12 +21,11 @@ from rcsc.backend import (
     built_controllers,
     register,
     schedule_of,
-    where,
 )
 from rcsc.backends.c.tables import main_tables
-from rcsc.backends.c.target import CTarget, _strip_parens, c_comment
+from rcsc.backends.c.target import CTarget, _strip_parens
 from rcsc.simulate import zero_value
-from rcsc.types import EnumType, RecordType
+from rcsc.types import I32, EnumType, RecordType
 
 RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c")
 
@@ -75,7 +74,7 @@ class CBackend(CTarget):
             else:
                 assert isinstance(t, RecordType)
                 types.append({"kind": "record", "name": self.ctype(t), "fields": [f"{self.ctype(ft)} {self.ident(n)};" for n, ft in t.fields]})
-        consts = [{"name": f"{p}_{k.name}", "value": self.literal(k.value, k.type), "where": where(k.span)} for k in d.consts.values()]
+        consts = [{"name": f"{p}_{k.name}", "value": self.literal(k.value, k.type), "where": self.where_text(k.span)} for k in d.consts.values()]
         gm = [f"{self.ctype(v.type)} {self.ident(v.name)};" for v in d.gm.values()]
         buffers = []
         for c in ctrls:
@@ -112,13 +111,13 @@ class CBackend(CTarget):
         used = {e.name for e in m.walk_expr(f.body) if isinstance(e, m.Ref) and e.kind == "arg"}
         return {
             "proto": f"static inline {self.prototype(f)}",
-            "where": where(f.span),
+            "where": self.where_text(f.span),
             "unused": [self.ident(q.name) for q in f.params if q.name not in used],
             "body": self.expr(f.body),
         }
 
     def extern_stub(self, f: m.Function) -> dict:
-        return {"proto": self.prototype(f), "where": where(f.span), "params": [self.ident(q.name) for q in f.params],
+        return {"proto": self.prototype(f), "where": self.where_text(f.span), "params": [self.ident(q.name) for q in f.params],
                 "zero": self.literal(zero_value(f.ret), f.ret)}
 
     def design_source(self, ctrls: list[m.Controller]) -> dict:
@@ -153,7 +152,7 @@ class CBackend(CTarget):
         ctx = {
             "p": p, "name": c.name, "type": self.ctrl_type(c.name), "member": member,
             "own": f"buf->{member}_status", "cmd": f"buf->{member}_cmd",
-            "kind": "simulator" if c.simulator else "controller", "level": c.level, "where": where(c.span),
+            "kind": "simulator" if c.simulator else "controller", "level": c.level, "where": self.where_text(c.span),
             "budget_ns": c.budget_ns,
             "subs": subs, "locals": locals_, "init": init,
             "states": [{"name": _state_enum(s), "number": i} for i, s in enumerate(info.states)],
@@ -170,7 +169,7 @@ class CBackend(CTarget):
         return {
             "fn": f"{c.name}_plan_{plan.verb}",
             "verb": plan.verb,
-            "where": where(plan.span),
+            "where": self.where_text(plan.span),
             "continuous": plan.continuous,
             "needs_state": tests_state(layout),
             "body": self.layout(layout),
@@ -225,11 +224,11 @@ class CBackend(CTarget):
         elif nxt.kind == "done":
             body += [f"{own}.head.status = RCS_DONE;", f"{own}.head.state = ST_DONE;", "self->plan = 0;"]
         elif nxt.kind == "error":
-            body += [f"{own}.head.status = RCS_ERROR;", f"{own}.head.error_code = {nxt.code};",
+            body += [f"{own}.head.status = RCS_ERROR;", f"{own}.head.error_code = {self.literal(nxt.code, I32)};",
                      f"{own}.head.state = ST_ERROR;", "self->plan = 0;"]
-        guard_text = "otherwise" if r.guard is None else c_comment(r.guard_span.text)
+        guard_text = "otherwise" if r.guard is None else self.comment(r.guard_span.text)
         head = f"if ({cond}) {{" if cond else "{"
-        return [f"/* {r.label} ({where(r.span)}): {guard_text} | {r.state} -> {c_comment(r.next.span.text)} */", head] + ["    " + x for x in body] + ["    return;", "}"]
+        return [f"/* {r.label} ({self.where_text(r.span)}): {guard_text} | {r.state} -> {self.comment(r.next.span.text)} */", head] + ["    " + x for x in body] + ["    return;", "}"]
 
 
 _HEAD_INIT = [

@@ -42,9 +42,10 @@ def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: li
         else:
             assert isinstance(t, RecordType)
             rows = _fields(tg, tg.ctype(t), list(t.fields))
+            # A record without fields has no field table (C has no empty array).
             types.append({
-                "arrays": [f"static const rcs_field fields_{t.name}[] = {{"] + ["    " + r for r in rows] + ["};"],
-                "decl": f"static const rcs_type type_{t.name} = {{RCS_T_RECORD, {c_string(t.name)}, NULL, 0u, fields_{t.name}, {len(t.fields)}u}};",
+                "arrays": [f"static const rcs_field fields_{t.name}[] = {{"] + ["    " + r for r in rows] + ["};"] if rows else [],
+                "decl": f"static const rcs_type type_{t.name} = {{RCS_T_RECORD, {c_string(t.name)}, NULL, 0u, {f'fields_{t.name}' if rows else 'NULL'}, {len(t.fields)}u}};",
             })
     type_list = [f"&type_{t.name}," for t in ordered_types(d)]
 

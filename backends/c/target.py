@@ -29,12 +29,22 @@ C_KEYWORDS = frozenset(
 
 # Suffix of the rcs_num.h helper for each integer type.
 INT_SUFFIX = {"i32": "i32", "i64": "i64", "u32": "u32", "duration": "i64"}
+# The <stdint.h> macro family of each integer type (`INT32_C`, `INT32_MIN`).
+C_INT_MACRO = {"i32": "INT32", "i64": "INT64", "u32": "UINT32"}
 ARITH = {"+": "add", "-": "sub", "*": "mul", "/": "div", "%": "rem"}
 
 
 def c_comment(text: str) -> str:
-    """Text that is safe inside /* ... */ and on one line."""
-    return re.sub(r"\s+", " ", text.replace("*/", "* /")).strip()
+    """Design text made safe inside a one-line `/* ... */` (the C target's comment
+    sanitiser).  White space runs become one space, so no newline ends the line
+    early; a character that is not printable ASCII, and a backslash (a line
+    splice before a newline), becomes `?`; `/*` and `*/` are split (-Wcomment,
+    and the comment would end early); `??` is split, so no trigraph forms (with
+    -std=c99 `??/` is a backslash, and -Wtrigraphs warns)."""
+    text = "".join(ch if " " <= ch <= "~" and ch != "\\" else (" " if ch.isspace() else "?") for ch in text)
+    text = re.sub(r" +", " ", text).strip()
+    text = re.sub(r"(?<=/)(?=\*)|(?<=\*)(?=/)", " ", text)
+    return re.sub(r"(?<=\?)(?=\?)", " ", text)
 
 
 def c_string(text: str) -> str:
@@ -43,6 +53,7 @@ def c_string(text: str) -> str:
 
 class CTarget(Target):
     name = "c"
+    comment = staticmethod(c_comment)
     summary = "C99 controllers (freestanding) and a POSIX Main Program per CPU"
     package = "rcsc.backends.c"
 
@@ -91,14 +102,16 @@ class CTarget(Target):
         """A constant value of type `t`.  `braces`: as a static initializer (records as `{...}`)."""
         if t == BOOL:
             return "true" if value else "false"
-        if t == DURATION or t == I64:
+        if isinstance(t, IntType) or t == DURATION:
+            # Each integer literal is written with the macro of its exact type
+            # (<stdint.h>): a bare `3000000000` would be whatever type holds it
+            # on the platform.  The most negative value has no literal.
+            it = I64 if t == DURATION else t
+            assert isinstance(it, IntType)
             v = int(value)
-            return "INT64_MIN" if v == I64.min else (f"INT64_C({v})" if v >= 0 else f"(-INT64_C({-v}))")
-        if t == I32:
-            v = int(value)
-            return "INT32_MIN" if v == I32.min else (str(v) if v >= 0 else f"(-{-v})")
-        if t == U32:
-            return f"{int(value)}u"
+            if it.signed and v == it.min:
+                return f"{C_INT_MACRO[it.name]}_MIN"
+            return f"{C_INT_MACRO[it.name]}_C({v})" if v >= 0 else f"(-{C_INT_MACRO[it.name]}_C({-v}))"
         if isinstance(t, FloatType):
             x = float(value)
             if math.isnan(x):
@@ -112,7 +125,8 @@ class CTarget(Target):
         if isinstance(t, EnumType):
             return self.member(t, str(value))
         if isinstance(t, RecordType):
-            inner = ", ".join(self.literal(value[n], ft, braces) for n, ft in t.fields)
+            # A record without fields holds one unused member (C has no empty struct).
+            inner = ", ".join(self.literal(value[n], ft, braces) for n, ft in t.fields) or "0"
             return "{" + inner + "}" if braces else f"(({self.ctype(t)}){{{inner}}})"
         raise ValueError(f"no C literal for {t}")
 
@@ -195,7 +209,7 @@ class CTarget(Target):
             name = self.cse.get(expr_key(e))
             return name if name is not None else f"{self.p}_{e.func}({', '.join(args)})"
         if e.kind == "record":
-            return f"(({self.ctype(e.type)}){{{', '.join(args)}}})"
+            return f"(({self.ctype(e.type)}){{{', '.join(args) or '0'}}})"
         if e.kind == "convert":
             return self._convert(args[0], e.args[0].type, e.type)
         if e.func == "seconds":

@@ -23,9 +23,9 @@ from __future__ import annotations
 from importlib import resources
 
 from rcsc import model as m
-from rcsc.backend import OutFile, RuleStep, ordered_types, StateTest, built_controllers, expr_key, plan_layout, register, schedule_of, tests_state, where
+from rcsc.backend import OutFile, RuleStep, ordered_types, StateTest, built_controllers, expr_key, plan_layout, register, schedule_of, tests_state
 from rcsc.backends.rust.fmt import Atom, Bin, Call, Node, Struct, arm, assign, expr_stmt, field_decl, fn_head, if_open, let, pad, tail
-from rcsc.backends.rust.target import RustTarget, rust_comment
+from rcsc.backends.rust.target import RustTarget
 from rcsc.simulate import zero_value
 from rcsc.types import I32, EnumType, RecordType, Type
 
@@ -113,7 +113,7 @@ class RustBackend(RustTarget):
             self.begin()
             params = ["&self"] + [f"{self.param(q.name)}: {self.lib_type(q.type)}" for q in f.params]
             methods.append({
-                "doc": f"{where(f.span)}, budget {_duration(f.budget_ns)}.",
+                "doc": f"{self.where_text(f.span)}, budget {_duration(f.budget_ns)}.",
                 "head": fn_head(1, "", self.ident(f.name), params, self.lib_type(f.ret), end=";"),
             })
         return {
@@ -125,6 +125,10 @@ class RustBackend(RustTarget):
             "externs_impl": bool(externs),
         }
 
+    def type_where(self, t: Type) -> str:
+        span = getattr(t, "span", None)
+        return self.where_text(span) if span is not None else t.name
+
     def lib_type(self, t: Type) -> str:
         return f"types::{self.rtype(t)}" if isinstance(t, (EnumType, RecordType)) else self.rtype(t)
 
@@ -135,7 +139,7 @@ class RustBackend(RustTarget):
             params = ["&self"] + [f"_{self.param(q.name)}: {self.rtype(q.type)}" for q in f.params]
             uses_types |= any(isinstance(t, (EnumType, RecordType)) for t in [f.ret] + [q.type for q in f.params])
             fns.append({
-                "where": f"{where(f.span)}, budget {_duration(f.budget_ns)}",
+                "where": f"{self.where_text(f.span)}, budget {_duration(f.budget_ns)}",
                 "head": fn_head(1, "", self.ident(f.name), params, self.rtype(f.ret)),
                 "zero": tail(self.literal(zero_value(f.ret), f.ret), 2),
             })
@@ -148,12 +152,12 @@ class RustBackend(RustTarget):
         types = []
         for t in ordered_types(d):
             if isinstance(t, EnumType):
-                types.append({"kind": "enum", "name": self.tname(t.name), "where": _where_type(t), "members": [self.ident(x) for x in t.members]})
+                types.append({"kind": "enum", "name": self.tname(t.name), "where": self.type_where(t), "members": [self.ident(x) for x in t.members]})
             else:
                 assert isinstance(t, RecordType)
-                types.append({"kind": "record", "name": self.tname(t.name), "where": _where_type(t),
+                types.append({"kind": "record", "name": self.tname(t.name), "where": self.type_where(t),
                               "fields": [x for n, ft in t.fields for x in field_decl(f"pub {self.ident(n)}: {self.rtype(ft)}", 1)]})
-        consts = [{"where": where(k.span), "lines": assign(f"pub const {self.vname(k.name)}: {self.rtype(k.type)}", "=", self.literal(k.value, k.type), 0)}
+        consts = [{"where": self.where_text(k.span), "lines": assign(f"pub const {self.vname(k.name)}: {self.rtype(k.type)}", "=", self.literal(k.value, k.type), 0)}
                   for k in d.consts.values()]
         gm_fields = [x for n, v in d.gm.items() for x in field_decl(f"pub {self.ident(n)}: {self.rtype(v.type)}", 1)]
         gm_init = assign("pub const INIT: Gm", "=", Struct("Gm", [(self.ident(n), self.init_value(v)) for n, v in d.gm.items()]), 1)
@@ -170,7 +174,7 @@ class RustBackend(RustTarget):
             if c.status_fields:
                 status_init.append(("f", Struct(fields_type, [(self.ident(n), self.init_value(v)) for n, v in c.status_fields.items()])))
             buffers.append({
-                "name": c.name, "member": self.ident(c.name), "where": where(c.span),
+                "name": c.name, "member": self.ident(c.name), "where": self.where_text(c.span),
                 "kind": "simulator" if c.simulator else "controller",
                 "verbs": verbs, "with_args": [v for v in verbs if v["params"]],
                 "statuses": [{"const": f"{c.name}_STATUS_{s}", "number": n} for s, n in c.statuses.items()],
@@ -205,7 +209,7 @@ class RustBackend(RustTarget):
             if any(isinstance(t, (EnumType, RecordType)) for t in [f.ret] + [q.type for q in f.params]):
                 self.uses.add("types")
             out.append({
-                "where": where(f.span),
+                "where": self.where_text(f.span),
                 "allow": len(params) > 7,
                 "head": fn_head(0, "pub ", self.vname(f.name), params, self.rtype(f.ret)),
                 "body": body,
@@ -286,7 +290,7 @@ class RustBackend(RustTarget):
         self.verb = None
         ctx = {
             "name": c.name, "type": me,
-            "kind": "simulator" if c.simulator else "controller", "level": c.level, "where": where(c.span),
+            "kind": "simulator" if c.simulator else "controller", "level": c.level, "where": self.where_text(c.span),
             "budget_ns": c.budget_ns,
             "subs": subs, "locals": locals_,
             "new_body": new_body,
@@ -315,7 +319,7 @@ class RustBackend(RustTarget):
         return {
             "fn": f"plan_{plan.verb}",
             "verb": plan.verb,
-            "doc": f"plan {plan.verb}{' (continuous)' if plan.continuous else ''}, {where(plan.span)}: the first rule whose state and",
+            "doc": f"plan {plan.verb}{' (continuous)' if plan.continuous else ''}, {self.where_text(plan.span)}: the first rule whose state and",
             "head": fn_head(1, "", f"plan_{plan.verb}", params, None),
             "body": body,
             "ext": "ext" in uses,
@@ -387,8 +391,8 @@ class RustBackend(RustTarget):
             body += assign("self.plan", "=", Atom("0"), ind)
         if not last:
             body.append(f"{pad(ind)}return;")
-        guard_text = "otherwise" if r.guard is None else rust_comment(r.guard_span.text)
-        comment = f"{pad(indent)}// {r.label} ({where(r.span)}): {guard_text} | {r.state} -> {nxt}"
+        guard_text = "otherwise" if r.guard is None else self.comment(r.guard_span.text)
+        comment = f"{pad(indent)}// {r.label} ({self.where_text(r.span)}): {guard_text} | {r.state} -> {nxt}"
         if cond is None:
             return [comment] + body
         return [comment] + if_open(cond, indent) + body + [f"{pad(indent)}}}"]
@@ -422,9 +426,3 @@ def _duration(ns: int) -> str:
     if ns % 1_000 == 0:
         return f"{ns // 1_000} us"
     return f"{ns} ns"
-
-
-def _where_type(t: Type) -> str:
-    span = getattr(t, "span", None)
-    return where(span) if span is not None else t.name
-

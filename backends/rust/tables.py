@@ -76,6 +76,8 @@ class _Main:
             return lines
         if isinstance(t, RecordType):
             rt = tg.rtype(t)
+            if not t.fields:  # a record without fields: nothing to read
+                return fn_head(0, "", f"{t.name}_of", ["_v: Option<&Value>"], rt) + tail(Struct(rt, []), 1) + ["}"]
             lines = fn_head(0, "", f"{t.name}_of", ["v: Option<&Value>"], rt) + ["    let f: &[Value] = match v {",
                      "        Some(Value::Record(f)) => f,", "        _ => &[],", "    };"]
             fields = []
@@ -97,8 +99,8 @@ class _Main:
         self.helpers[name] = []
         tg = self.tg
         items = [self.to_value(f"r.{tg.ident(n)}", ft) for n, ft in t.fields]
-        body = tail(Call("Value::Record", [Call("Vec::from", [Array(items)])]), 1)
-        self.helpers[name] = fn_head(0, "", name, [f"r: {tg.rtype(t)}"], "Value") + body + ["}"]
+        body = tail(Call("Value::Record", [Call("Vec::from", [Array(items)]) if items else Call("Vec::new")]), 1)
+        self.helpers[name] = fn_head(0, "", name, [f"{'r' if items else '_r'}: {tg.rtype(t)}"], "Value") + body + ["}"]
 
 
 def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: list[m.Controller]) -> dict:

@@ -73,8 +73,16 @@ RUST_BIN = {"and": "&&", "or": "||"}
 
 
 def rust_comment(text: str) -> str:
-    """Text that is safe on one `//` comment line."""
-    return re.sub(r"\s+", " ", text).strip()
+    """Design text made safe on one `//` or `///` comment line (the Rust target's
+    comment sanitiser).  White space runs become one space (no newline ends the
+    line early, no bare CR, which rustc refuses in doc comments, no tab,
+    clippy::tabs_in_doc_comments); a character that is not printable ASCII
+    becomes `?` (rustc refuses bidirectional controls); `/*` and `*/` are split
+    (Rust block comments nest); a backquote becomes `'` (in a doc comment it
+    would open Markdown code, a doctest)."""
+    text = "".join(ch if " " <= ch <= "~" else (" " if ch.isspace() else "?") for ch in text)
+    text = re.sub(r" +", " ", text).strip().replace("`", "'")
+    return re.sub(r"(?<=/)(?=\*)|(?<=\*)(?=/)", " ", text)
 
 
 def rust_string(text: str) -> str:
@@ -94,6 +102,7 @@ def rust_string(text: str) -> str:
 
 class RustTarget(Target):
     name = "rust"
+    comment = staticmethod(rust_comment)
     summary = "Rust crate: a no_std, unsafe-free controller library and a std Main Program per CPU"
     package = "rcsc.backends.rust"
 
@@ -177,7 +186,10 @@ class RustTarget(Target):
             assert isinstance(it, IntType)
             if it.signed and v == it.min:
                 return Atom(f"{it.name}::MIN")
-            return Atom(str(v), P_UNARY if v < 0 else P_POSTFIX)
+            # Suffixed: an unsuffixed literal takes its type from inference,
+            # which falls back to i32 where nothing constrains it (`if c { 1 }
+            # else { 3000000000 } <= 1000000000` would not compile).
+            return Atom(f"{v}_{it.name}", P_UNARY if v < 0 else P_POSTFIX)
         if isinstance(t, FloatType):
             x = float(value)
             if math.isnan(x):
@@ -185,9 +197,9 @@ class RustTarget(Target):
             if math.isinf(x):
                 return Atom("f64::INFINITY" if x > 0 else "f64::NEG_INFINITY")
             text = repr(x)
-            if "." not in text and "e" not in text and "n" not in text:
+            if "." not in text and "e" not in text:
                 text += ".0"
-            return Atom(text, P_UNARY if text.startswith("-") else P_POSTFIX)
+            return Atom(f"{text}_f64", P_UNARY if text.startswith("-") else P_POSTFIX)
         if isinstance(t, EnumType):
             return Atom(f"{self.tname(t.name)}::{self.ident(str(value))}")
         if isinstance(t, RecordType):
