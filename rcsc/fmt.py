@@ -64,6 +64,7 @@ class _Line:
     text: str  # without the newline
     code: list[bool]
     in_comment: bool  # the line starts inside a block comment
+    ends_in_comment: bool = False  # its newline is inside a block comment
 
     @property
     def stripped(self) -> str:
@@ -81,7 +82,8 @@ def _lines(text: str) -> list[_Line]:
     for raw in text.split("\n"):
         # Only a block comment covers a newline, so a line whose preceding
         # newline is not code starts inside one.
-        out.append(_Line(pos, raw, mask[pos:pos + len(raw)], pos > 0 and not mask[pos - 1]))
+        end = pos + len(raw)
+        out.append(_Line(pos, raw, mask[pos:end], pos > 0 and not mask[pos - 1], end < len(text) and not mask[end]))
         pos += len(raw) + 1
     return out
 
@@ -103,10 +105,11 @@ def format_text(text: str) -> str:
     while i < len(lines):
         line = lines[i]
         if line.in_comment:
-            out.append(line.text.rstrip())
+            # Inside a block comment every character is kept, up to where it ends.
+            out.append(line.text if line.ends_in_comment else line.text.rstrip())
             i += 1
             continue
-        stripped = line.text.strip()
+        stripped = line.text.lstrip() if line.ends_in_comment else line.text.strip()
         if not stripped:
             blank += 1
             i += 1
@@ -129,7 +132,7 @@ def format_text(text: str) -> str:
             out.extend(rows)
             i = j
             continue
-        out.append((indent + stripped).rstrip())
+        out.append(indent + stripped if line.ends_in_comment else (indent + stripped).rstrip())
         if _PLAN_HEAD.match(code):
             pending_plan = True
         for ch in code:
@@ -165,7 +168,7 @@ class _Rule:
     has_jobs_bar: bool
     tail: str  # what follows the `;` on its line (a comment, with its gap)
     continuation: list[str]  # further lines of the job list
-    verbatim: list[str] | None  # the rule's lines when it is left as written
+    verbatim: list[_Line] | None  # the rule's lines when it is left as written
 
 
 def _collect_rules(lines: list[_Line], i: int, d: int, block: list) -> tuple[int, list[str]]:
@@ -219,11 +222,13 @@ def _collect_rules(lines: list[_Line], i: int, d: int, block: list) -> tuple[int
         if item.cells is None:
             assert item.verbatim is not None
             first = item.verbatim[0]
-            out.append(indent + first.strip())
-            delta = len(indent) - _indent_width(first)
+            out.append(_keep_end(first, indent + first.text.lstrip()))
+            delta = len(indent) - _indent_width(first.text)
             for more in item.verbatim[1:]:
-                w = _indent_width(more)
-                out.append((" " * max(0, w + delta) + more.strip()).rstrip())
+                if more.in_comment:  # inside a block comment: as written
+                    out.append(_keep_end(more, more.text))
+                else:
+                    out.append(_keep_end(more, " " * max(0, _indent_width(more.text) + delta) + more.text.lstrip()))
             continue
         head, state, nxt, jobs = item.cells
         row = f"{indent}{head:<{widths[0]}} | {state:<{widths[1]}} -> "
@@ -241,6 +246,12 @@ def _collect_rules(lines: list[_Line], i: int, d: int, block: list) -> tuple[int
         else:
             out.append(row + nxt + ";" + item.tail)
     return i, out
+
+
+def _keep_end(line: _Line, text: str) -> str:
+    """`text` without trailing blanks, unless the line ends inside a block
+    comment (a comment keeps every character)."""
+    return text if line.ends_in_comment else text.rstrip()
 
 
 def _split_top(text: str, code: str, sep: str) -> list[int]:
@@ -266,7 +277,7 @@ def _squash(text: str) -> str:
 
 
 def _parse_rule(rule_lines: list[_Line], d: int, block: list) -> _Rule:
-    verbatim = _Rule(None, False, "", [], [ln.text for ln in rule_lines])
+    verbatim = _Rule(None, False, "", [], list(rule_lines))
     first = rule_lines[0]
     code = first.code_chars()
     semi_line = rule_lines[-1]
