@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import glob
 import os
+import stat
 from dataclasses import dataclass
 
 SUFFIX = ".rcs"
@@ -78,8 +79,12 @@ def _is_venv(path: str) -> bool:
 
 def header_kind(path: str) -> str | None:
     """`design`, `module`, or None (unreadable, or another first word), from
-    the first word after comments and blanks; reads at most 64 KiB."""
+    the first word after comments and blanks; reads at most 64 KiB, and only
+    from a regular file (opening a FIFO would wait for a writer forever; the
+    front end then refuses such a file with a proper message)."""
     try:
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return None
         with open(path, "rb") as f:
             head = f.read(65536)
     except OSError:
