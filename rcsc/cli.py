@@ -32,7 +32,7 @@ EXIT_FINDINGS = 1
 EXIT_USAGE = 2  # also I/O errors and internal errors: DESIGN allows 0, 1, 2 only
 EXIT_INTERRUPTED = 130  # the shell convention for SIGINT (128 + 2)
 
-FORMATS = ("human", "short", "json", "sarif")
+FORMATS = ("human", "short", "json", "sarif", "github")
 
 
 class UsageError(Exception):
@@ -68,25 +68,36 @@ def _emit_report(text: str, output: str | None) -> None:
         raise UsageError(f"cannot write `{output}`: {exc.strerror or exc}") from exc
 
 
-def _use_color(choice: str, output: str | None) -> bool:
+def _use_color(choice: str, output: str | None, stream=None) -> bool:
+    """Whether a report gets ANSI colour.
+
+    `--color always|never` decides first; a report written to a file (`-o`)
+    has none.  Otherwise, as https://force-color.org specifies, a non-empty
+    FORCE_COLOR turns colour on even for a pipe and wins over NO_COLOR; a
+    non-empty NO_COLOR (https://no-color.org) or TERM=dumb turns it off; else
+    only a terminal gets colour.
+    """
     if choice == "always":
         return True
     if choice == "never" or output is not None:
         return False
-    # auto: only a terminal gets colour, and https://no-color.org is honoured.
+    if os.environ.get("FORCE_COLOR"):
+        return True
     if os.environ.get("NO_COLOR") or os.environ.get("TERM") == "dumb":
         return False
-    isatty = getattr(sys.stdout, "isatty", None)
+    isatty = getattr(stream or sys.stdout, "isatty", None)
     return bool(isatty and isatty())
 
 
-def _render(diags: Diagnostics, fmt: str, color: bool) -> str:
+def _render(diags: Diagnostics, fmt: str, color: bool, quiet: bool = False) -> str:
     from rcsc import render
 
     if fmt == "human":
-        return render.render_human(diags, color=color)
+        return render.render_human(diags, color=color, summary=not quiet)
     if fmt == "short":
         return render.render_short(diags)
+    if fmt == "github":
+        return render.render_github(diags)
     if fmt == "json":
         return render.render_json(diags, rcsc.__version__)
     return render.render_sarif(diags, rcsc.__version__)
@@ -110,7 +121,7 @@ def _load_driver() -> ModuleType:
     return driver
 
 
-def _check(path: str, cache: bool = False):
+def _check(path: str, as_module: bool = False, cache: bool = False):
     """Run the front end on `path`; an unreadable root file is a usage error (exit 2).
 
     With `cache`, the guard analysis uses the design's `.rcsc-cache/` folder.
@@ -120,21 +131,34 @@ def _check(path: str, cache: bool = False):
         if cache:
             from rcsc.cache import folder_for
 
-            result = driver.check_path(path, cache_dir=folder_for(path))
+            result = driver.check_path(path, as_module=as_module, cache_dir=folder_for(path))
         else:
-            result = driver.check_path(path)
+            result = driver.check_path(path, as_module=as_module)
     except driver.InputError as exc:
         raise UsageError(str(exc)) from exc
     return result
 
 
 def _add_check_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("path", metavar="PATH", help="the design's root file (it begins with `design NAME`)")
+    p.add_argument(
+        "paths", metavar="PATH", nargs="+",
+        help="design files, module files, folders (searched for *.rcs) or glob patterns",
+    )
     p.add_argument(
         "--no-cache", action="store_true",
         help="do not read or write the guard-analysis cache (.rcsc-cache/ next to the design; also RCSC_NO_CACHE=1)",
     )
     _add_report_arguments(p)
+    p.add_argument("-q", "--quiet", action="store_true", help="print the findings only: no summary line, no notes")
+    g = p.add_argument_group("configuration (docs/configuration.md)")
+    g.add_argument("--config", metavar="FILE", help="use this rcsc.toml or pyproject.toml instead of searching for one")
+    g.add_argument("--no-config", action="store_true", help="ignore every configuration file")
+    g.add_argument("--select", metavar="CODES", help="report only these warnings (comma-separated codes or prefixes)")
+    g.add_argument("--ignore", metavar="CODES", help="never report these warnings (comma-separated codes or prefixes)")
+    g.add_argument(
+        "--severity", metavar="CODE=LEVEL", action="append", default=[],
+        help="report warning CODE as error, warning or note (repeatable)",
+    )
 
 
 def _add_report_arguments(p: argparse.ArgumentParser) -> None:
@@ -143,16 +167,148 @@ def _add_report_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--deny-warnings", action="store_true", help="exit with 1 on warnings too")
     p.add_argument(
         "--color", choices=("auto", "always", "never"), default="auto",
-        help="colour the human report (default: auto, a terminal without NO_COLOR)",
+        help="colour the human report (default: auto, a terminal without NO_COLOR, or FORCE_COLOR)",
     )
     p.add_argument("-o", "--output", metavar="FILE", help="write the report to FILE instead of stdout")
 
 
+def _cli_overrides(args: argparse.Namespace):
+    """The configuration flags as a function that amends a loaded Config."""
+    from rcsc import config as cfg
+
+    def split(value: str | None) -> list[str] | None:
+        if value is None:
+            return None
+        return [v.strip() for v in value.split(",") if v.strip()]
+
+    select, ignore = split(args.select), split(args.ignore)
+    severity: dict = {}
+    for item in args.severity:
+        code, _, level = item.partition("=")
+        code = code.strip().upper()
+        if code not in codes.CODES or level.strip() not in cfg.SEVERITIES:
+            raise UsageError(f"--severity `{item}`: write CODE=error|warning|note with a known code")
+        if not code.startswith("W"):
+            raise UsageError(f"--severity `{item}`: the severity of an error cannot be changed")
+        severity[code] = cfg.SEVERITIES[level.strip()]
+    for flag, values in (("--select", select), ("--ignore", ignore)):
+        for v in values or []:
+            if not any(c.startswith(v) for c in codes.CODES):
+                raise UsageError(f"{flag}: `{v}` is not a diagnostic code or a prefix of one")
+            if flag == "--ignore" and v.startswith("E"):
+                raise UsageError(f"{flag}: errors cannot be ignored (`{v}`)")
+
+    def amend(conf):
+        if select is not None:
+            conf.select = select
+        if ignore:
+            conf.ignore = conf.ignore + ignore
+        conf.severity.update(severity)
+        return conf
+
+    return amend
+
+
+class _CheckRun:
+    """One `rcsc check PATH...`: every design checked once, modules through
+    the designs that import them, every finding in one bag."""
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        from rcsc import config as cfg
+
+        self.args = args
+        self.cfg = cfg
+        self.amend = _cli_overrides(args)
+        self.total = Diagnostics()
+        self.covered: set[str] = set()  # real paths of every file some check loaded
+        self.checked: set[str] = set()  # real paths of the roots checked
+        self.configs: dict[str | None, object] = {}
+        self.usage_problem = False
+        self.loaded = 0  # roots that could be read
+
+    def config_for(self, path: str):
+        args = self.args
+        if args.no_config:
+            found = None
+        elif args.config:
+            found = (args.config, os.path.basename(args.config) == self.cfg.PYPROJECT)
+        else:
+            found = self.cfg.find(path)
+        key = found[0] if found else None
+        if key not in self.configs:
+            if found is None:
+                conf = self.cfg.Config()
+            else:
+                conf = self.cfg.load(_display(found[0]), found[1], self.total)
+            self.configs[key] = self.amend(conf)
+        return self.configs[key]
+
+    def run(self, path: str, as_module: bool = False) -> None:
+        conf = self.config_for(path)
+        self.checked.add(os.path.realpath(path))
+        try:
+            result = _check(path, as_module, cache=not self.args.no_cache)
+        except UsageError as exc:
+            _error(str(exc))
+            self.usage_problem = True
+            return
+        self.loaded += 1
+        self.total.extend(conf.apply(result.diags))
+        for f in getattr(result, "files", None) or []:
+            if not f.source.path.startswith("<stdlib>"):
+                self.covered.add(os.path.realpath(f.source.path))
+
+    def imports_module(self, design: str, module_real: str) -> bool:
+        from rcsc.loader import InputError, path_to_files
+
+        try:
+            files = path_to_files(design, Diagnostics())
+        except InputError:
+            return False
+        return any(os.path.realpath(f.source.path) == module_real for f in files if not f.is_root)
+
+
 def _run_check(args: argparse.Namespace) -> int:
-    result = _check(args.path, cache=not args.no_cache)
+    from rcsc import workspace
+
+    run = _CheckRun(args)
+    expanded = workspace.expand(args.paths)
+    for problem in expanded.problems:
+        _error(problem)
+    explicit = {os.path.realpath(p) for p in args.paths if os.path.isfile(p)}
+    files = [
+        f for f in expanded.files
+        if os.path.realpath(f) in explicit or not run.config_for(f).excluded(f)
+    ]
+    modules = []
+    for f in files:
+        if workspace.header_kind(f) == "module":
+            modules.append(f)
+        else:
+            run.run(f)
+    for m in modules:
+        real = os.path.realpath(m)
+        if real in run.covered:
+            continue
+        for design in workspace.candidate_designs(m):
+            if os.path.realpath(design) not in run.checked and run.imports_module(design, real):
+                run.run(_display(design))
+        if real not in run.covered:
+            run.run(m, as_module=True)
+    if run.loaded == 0 and not run.total.items:
+        # Nothing could be read: the messages on stderr are the whole answer.
+        return EXIT_USAGE
     color = args.format == "human" and _use_color(args.color, args.output)
-    _emit_report(_render(result.diags, args.format, color), args.output)
-    return _exit_code(result.diags, args.deny_warnings)
+    _emit_report(_render(run.total, args.format, color, quiet=args.quiet), args.output)
+    if run.usage_problem or (expanded.problems and not run.total.items):
+        return EXIT_USAGE
+    return _exit_code(run.total, args.deny_warnings)
+
+
+def _display(path: str) -> str:
+    """`path` relative to the current folder when it is inside it."""
+    rel = os.path.relpath(path)
+    return path if rel.startswith("..") else rel
 
 
 # ---------------------------------------------------------------------------
@@ -188,9 +344,7 @@ TRACE_FORMATS = ("jsonl", "csv", "vcd")
 def _report_to_stderr(diags: Diagnostics) -> None:
     from rcsc import render
 
-    isatty = getattr(sys.stderr, "isatty", None)
-    color = bool(isatty and isatty()) and not os.environ.get("NO_COLOR")
-    _write(sys.stderr, render.render_human(diags, color=color))
+    _write(sys.stderr, render.render_human(diags, color=_use_color("auto", None, sys.stderr)))
 
 
 def _add_sim_arguments(p: argparse.ArgumentParser) -> None:
@@ -455,6 +609,113 @@ def _run_targets(args: argparse.Namespace) -> int:
 
 
 # ---------------------------------------------------------------------------
+# rcsc fmt
+# ---------------------------------------------------------------------------
+
+def _add_fmt_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("paths", metavar="PATH", nargs="+", help="files, folders (searched for *.rcs) or glob patterns; `-` formats stdin to stdout")
+    p.add_argument("--check", action="store_true", help="change nothing; exit with 1 if a file is not formatted")
+    p.add_argument("--diff", action="store_true", help="change nothing; print a unified diff of what would change")
+    p.add_argument("-q", "--quiet", action="store_true", help="no summary line")
+
+
+def _run_fmt(args: argparse.Namespace) -> int:
+    import difflib
+    import stat
+
+    from rcsc import config as cfg
+    from rcsc import fmt, workspace
+
+    if args.paths == ["-"]:
+        text = sys.stdin.read()
+        formatted, diags = fmt.format_source("<stdin>", text)
+        if formatted is None:
+            _report_to_stderr(diags)
+            return EXIT_FINDINGS
+        _write(sys.stdout, formatted)
+        return EXIT_OK
+    expanded = workspace.expand(args.paths)
+    for problem in expanded.problems:
+        _error(problem)
+    explicit = {os.path.realpath(p) for p in args.paths if os.path.isfile(p)}
+    code = EXIT_USAGE if expanded.problems else EXIT_OK
+    changed = unchanged = 0
+    for path in expanded.files:
+        if os.path.realpath(path) not in explicit:
+            found = cfg.find(path)
+            if found and cfg.load(found[0], found[1], Diagnostics()).excluded(path):
+                continue
+        try:
+            raw = safeio.read_input(path)
+            text = raw.decode("utf-8")
+        except (OSError, safeio.InputError, UnicodeDecodeError) as exc:
+            _error(f"{path}: cannot read: {getattr(exc, 'strerror', None) or exc}")
+            code = EXIT_USAGE
+            continue
+        formatted, diags = fmt.format_source(path, text)
+        if formatted is None:
+            _report_to_stderr(diags)
+            code = max(code, EXIT_FINDINGS) if code != EXIT_USAGE else code
+            continue
+        if formatted == text:
+            unchanged += 1
+            continue
+        changed += 1
+        if args.diff:
+            diff = difflib.unified_diff(
+                text.splitlines(keepends=True), formatted.splitlines(keepends=True),
+                *((path, path) if os.path.isabs(path) else (f"a/{path}", f"b/{path}")),
+            )
+            _write(sys.stdout, render.escape_controls("".join(diff)))
+        if args.check or args.diff:
+            if args.check:
+                _write(sys.stderr, f"would reformat {render.escape_controls(path)}\n")
+                code = max(code, EXIT_FINDINGS) if code != EXIT_USAGE else code
+            continue
+        try:
+            mode = stat.S_IMODE(os.stat(path).st_mode)
+            safeio.write_file(path, formatted.encode("utf-8"), may_replace=lambda _p: True, mode=mode)
+        except OSError as exc:
+            _error(f"cannot write `{path}`: {exc.strerror or exc}")
+            code = EXIT_USAGE
+    if not args.quiet:
+        verb = "would be reformatted" if (args.check or args.diff) else "reformatted"
+        _write(sys.stderr, f"{changed} file{'s' if changed != 1 else ''} {verb}, {unchanged} unchanged\n")
+    return code
+
+
+# ---------------------------------------------------------------------------
+# rcsc lsp
+# ---------------------------------------------------------------------------
+
+def _add_lsp_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--stdio", action="store_true", help="talk over stdin/stdout (the default and only transport)")
+
+
+def _run_lsp(args: argparse.Namespace) -> int:
+    try:
+        from rcsc import lsp
+    except ImportError as exc:
+        raise UsageError(f"the language server needs pygls: pip install 'rcsc[lsp]' ({exc})") from exc
+    return lsp.main()
+
+
+# ---------------------------------------------------------------------------
+# rcsc completion
+# ---------------------------------------------------------------------------
+
+def _add_completion_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("shell", choices=("bash", "zsh", "fish"), help="the shell to write the script for")
+
+
+def _run_completion(args: argparse.Namespace) -> int:
+    from rcsc import completion
+
+    _write(sys.stdout, completion.script(args.shell, build_parser()))
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------
 # the command table and the parser
 # ---------------------------------------------------------------------------
 
@@ -466,7 +727,7 @@ class Command:
 
 
 COMMANDS: dict[str, Command] = {
-    "check": Command("check a design and report findings", _add_check_arguments, _run_check),
+    "check": Command("check designs (files, folders, globs) and report findings", _add_check_arguments, _run_check),
     "explain": Command("explain a diagnostic code", _add_explain_arguments, _run_explain),
     "sim": Command("run a scenario in the reference simulator and write its trace", _add_sim_arguments, _run_sim),
     "test": Command("run scenarios with expectations, like a test runner", _add_test_arguments, _run_test),
@@ -475,23 +736,44 @@ COMMANDS: dict[str, Command] = {
     "doc": Command("write a one-page HTML description of a design", _add_doc_arguments, _run_doc),
     "build": Command("generate code for a target (`rcsc targets`) after every check passes", _add_build_arguments, _run_build),
     "targets": Command("list the code-generation targets", _add_targets_arguments, _run_targets),
+    "fmt": Command("format design files: state tables in aligned columns, comments kept", _add_fmt_arguments, _run_fmt),
+    "lsp": Command("run the language server on stdin/stdout (needs `pip install 'rcsc[lsp]'`)", _add_lsp_arguments, _run_lsp),
+    "completion": Command("print a shell completion script (bash, zsh or fish)", _add_completion_arguments, _run_completion),
 }
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The argument parser; with `only`, just that command's options are added.
+
+    Adding a command's options may import what the command uses (graph views,
+    build targets), so a run builds the options of its own command alone:
+    `rcsc --version` and `rcsc explain` then load neither the checks nor z3,
+    networkx or jinja2.  `rcsc completion` builds the whole tree.
+    """
     parser = argparse.ArgumentParser(
         prog="rcsc",
         description="A compiler and checker for NIST RCS real-time control designs.",
         epilog="exit codes: 0 clean, 1 errors found, 2 usage or I/O error",
         allow_abbrev=False,
     )
-    parser.add_argument("--version", action="version", version=f"rcsc {rcsc.__version__}")
+    parser.add_argument("-V", "--version", action="version", version=f"rcsc {rcsc.__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name, command in COMMANDS.items():
         p = sub.add_parser(name, help=command.help, description=command.help, allow_abbrev=False)
-        command.add_arguments(p)
+        if only is None or name == only:
+            command.add_arguments(p)
         p.set_defaults(run=command.run)
     return parser
+
+
+def _command_in(argv: list[str]) -> str | None:
+    """The command word of `argv` (its first word that is not an option)."""
+    for word in argv:
+        if word == "--":
+            return None
+        if not word.startswith("-"):
+            return word if word in COMMANDS else None
+    return None
 
 
 def _silence_stdout() -> None:
@@ -505,9 +787,14 @@ def _silence_stdout() -> None:
 
 
 def _main(argv: list[str] | None) -> int:
-    args = build_parser().parse_args(argv)
+    if argv is None:
+        argv = sys.argv[1:]
+    command = _command_in(argv)
+    # Without a known command word argparse only prints usage or the version.
+    args = build_parser(command or "").parse_args(argv)
     code = args.run(args)
-    sys.stdout.flush()  # a broken pipe surfaces here, inside the handlers
+    if not sys.stdout.closed:  # the language server closes it on `exit`
+        sys.stdout.flush()  # a broken pipe surfaces here, inside the handlers
     return code
 
 
@@ -543,6 +830,10 @@ def main(argv: list[str] | None = None) -> int:
         _error(str(exc))
         return EXIT_USAGE
     except KeyboardInterrupt:
+        # An interrupt can land inside a library's constructor (z3's Context);
+        # the half-built object's finalizer then fails at exit, printing
+        # "Exception ignored ... Traceback".  After Ctrl-C that is noise.
+        sys.unraisablehook = lambda _unraisable: None
         _write(sys.stderr, "\nerror: interrupted\n")
         return EXIT_INTERRUPTED
     except BrokenPipeError:

@@ -31,11 +31,12 @@ class CheckResult:
         return not self.diags.has_errors()
 
 
-def check_path(path: str, cache_dir: str | None = None) -> CheckResult:
-    """Load, analyse and check the design whose root file is `path`.
-
-    With `cache_dir` (see `rcsc.cache`), results of the guard analysis are
-    read from and written to that folder.
+def check_path(path: str, as_module: bool = False, overlay: dict[str, str] | None = None, cache_dir: str | None = None) -> CheckResult:
+    """Load, analyse and check the design whose root file is `path` (or, with
+    `as_module`, the module `path` on its own); `overlay` gives texts that
+    replace files on disk (see `loader.path_to_files`).  With `cache_dir`
+    (see `rcsc.cache`), results of the guard analysis are read from and
+    written to that folder.
     """
     # A compiler run allocates many long-lived objects and frees few: the
     # cyclic garbage collector would spend about half of a large design's
@@ -49,16 +50,16 @@ def check_path(path: str, cache_dir: str | None = None) -> CheckResult:
     gc.disable()
     gc.unfreeze()
     try:
-        return _check_path(path, cache_dir)
+        return _check_path(path, as_module, overlay, cache_dir)
     finally:
         gc.freeze()
         if was_enabled:
             gc.enable()
 
 
-def _check_path(path: str, cache_dir: str | None) -> CheckResult:
+def _check_path(path: str, as_module: bool, overlay: dict[str, str] | None, cache_dir: str | None) -> CheckResult:
     diags = Diagnostics()
-    files = path_to_files(path, diags)
+    files = path_to_files(path, diags, as_module, overlay)
     if any(f.tree is None for f in files):
         # A file that does not parse leaves holes that would only produce
         # follow-on findings; report the syntax errors alone.

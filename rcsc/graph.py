@@ -22,6 +22,7 @@ Used by `rcsc graph` and `rcsc doc` (see docs/graph.md).
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 import shutil
@@ -560,7 +561,11 @@ MERMAID_LINK_STYLE = {
     "any": "stroke-dasharray:6 4",
     "otherwise": "stroke-dasharray:2 3",
 }
-_MERMAID_ENTITIES = {'"': "#34;", "#": "#35;", "&": "#38;", "<": "#60;", ">": "#62;", "|": "#124;", "`": "#96;"}
+# Mermaid writes an entity as `#name;` or `#number;`.  The characters HTML
+# reads (`<`, `>`, `&`, `"`) take the named forms: current Mermaid turns
+# `#60;` into a `<` that its HTML sanitizer then treats as the start of a tag
+# and shows as a placeholder, while `#lt;` stays the character.
+_MERMAID_ENTITIES = {'"': "#quot;", "#": "#35;", "&": "#amp;", "<": "#lt;", ">": "#gt;", "|": "#124;", "`": "#96;"}
 
 
 def mermaid_text(text: str) -> str:
@@ -568,6 +573,26 @@ def mermaid_text(text: str) -> str:
     Mermaid or HTML would read, `<br/>` for line breaks."""
     lines = ["".join(_MERMAID_ENTITIES.get(ch, ch if ch >= " " else " ") for ch in line) for line in text.split("\n")]
     return "<br/>".join(lines)
+
+
+def _merge_self_loops(edges: list[Edge]) -> list[Edge]:
+    """Mermaid draws every loop of a node on the same spot, so several loops
+    of one state (of one kind) become one loop with all their labels."""
+    out: list[Edge] = []
+    first: dict[tuple, Edge] = {}
+    for e in edges:
+        if e.src != e.dst:
+            out.append(e)
+            continue
+        key = (e.src, e.kind, e.flagged)
+        if key in first:
+            kept = first[key]
+            kept.label = "\n".join(filter(None, [kept.label, e.label]))
+            continue
+        e = dataclasses.replace(e)
+        first[key] = e
+        out.append(e)
+    return out
 
 
 def to_mermaid(g: Graph) -> str:
@@ -586,7 +611,7 @@ def to_mermaid(g: Graph) -> str:
     clustered = {cl.id for cl in g.clusters}
     out.extend(node_line(n, "  ") for n in g.nodes if n.cluster not in clustered)
     link_styles = []
-    links = [e for e in g.edges if e.kind != "invisible" and e.src in ids and e.dst in ids]
+    links = _merge_self_loops([e for e in g.edges if e.kind != "invisible" and e.src in ids and e.dst in ids])
     for i, e in enumerate(links):
         arrow = "-.->" if e.kind in ("any", "otherwise", "idle", "env") else "-->"
         label = f'|"{mermaid_text(e.label)}"|' if e.label else ""

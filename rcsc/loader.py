@@ -55,10 +55,20 @@ def stdlib_path(module: str):
     return node if node.is_file() else None
 
 
-def path_to_files(path: str, diags: Diagnostics) -> list[LoadedFile]:
-    """Read and parse the root design file and, transitively, its imports."""
+def path_to_files(
+    path: str, diags: Diagnostics, as_module: bool = False, overlay: dict[str, str] | None = None
+) -> list[LoadedFile]:
+    """Read and parse the root design file and, transitively, its imports.
+
+    With `as_module`, the root may also be a `module` (checked on its own,
+    as `rcsc check` does for a module that no design imports).  `overlay`
+    maps real paths to texts that replace the files' contents (the unsaved
+    documents of an editor, for the language server)."""
+    overlay = overlay or {}
     try:
-        text = _read(path)
+        text = overlay.get(os.path.realpath(path))
+        if text is None:
+            text = _read(path)
     except FileNotFoundError as exc:
         raise InputError(f"{path}: no such file") from exc
     except IsADirectoryError as exc:
@@ -77,7 +87,8 @@ def path_to_files(path: str, diags: Diagnostics) -> list[LoadedFile]:
         module = ""
         if tree is not None:
             module = tree.name.name if tree.name is not None and tree.kind == "module" else ""
-            _check_header(tree, source, is_root, diags)
+            if not (is_root and as_module and tree.kind == "module"):
+                _check_header(tree, source, is_root, diags)
         files.append(LoadedFile(source, tree, module, is_root))
         if tree is None:
             return
@@ -107,7 +118,7 @@ def path_to_files(path: str, diags: Diagnostics) -> list[LoadedFile]:
         if real in seen:
             return
         try:
-            text = _read(real)
+            text = overlay[real] if real in overlay else _read(real)
         except InputError as exc:
             diags.add("E0003", _target_span(item), f"cannot read `{target}`: {exc}", "imported here")
             return

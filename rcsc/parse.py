@@ -55,7 +55,9 @@ _TOKEN_WORDS = {
 @lru_cache(maxsize=1)
 def _parser() -> Lark:
     text = resources.files("rcsc.grammar").joinpath("rcs.lark").read_text(encoding="utf-8")
-    return Lark(text, parser="lalr", propagate_positions=True, maybe_placeholders=True)
+    from rcsc.grammar_cache import lark_cache
+
+    return Lark(text, parser="lalr", propagate_positions=True, maybe_placeholders=True, cache=lark_cache("rcs", text))
 
 
 def _describe_expected(parser: Lark, names: set[str]) -> list[str]:

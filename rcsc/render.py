@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path, PurePosixPath, PureWindowsPath
 from urllib.parse import quote
 
-from rcsc.codes import CODES, Code
+from rcsc.codes import CODES, DOCS_URL, Code, help_uri
 from rcsc.diagnostics import Diagnostic, Diagnostics, Severity
 from rcsc.source import BIDI_CONTROLS, SourceFile, Span
 
@@ -40,9 +40,9 @@ JSON_FORMAT_VERSION = 1
 
 SARIF_VERSION = "2.1.0"
 SARIF_SCHEMA_URI = "https://json.schemastore.org/sarif-2.1.0.json"
-# The project has no public home page yet.  SARIF requires informationUri to be
-# an absolute URI when present, so it is left out until there is a real one.
-INFORMATION_URI: str | None = None
+# The tool's documentation (SARIF requires an absolute URI); each rule's helpUri
+# is `codes.help_uri(code)` below it.
+INFORMATION_URI: str | None = DOCS_URL
 # Named and versioned as SARIF recommends, so that a future change of the
 # hashed fields can use a new key instead of silently re-keying every finding.
 FINGERPRINT_KEY = "rcscFinding/v1"
@@ -362,8 +362,9 @@ def _summary(errors: int, warnings: int, paint: _Painter) -> str:
     )
 
 
-def render_human(diags: Diagnostics | Iterable[Diagnostic], color: bool) -> str:
-    """rustc-style report; ANSI colour only when `color` is true."""
+def render_human(diags: Diagnostics | Iterable[Diagnostic], color: bool, summary: bool = True) -> str:
+    """rustc-style report; ANSI colour only when `color` is true; the closing
+    `N errors emitted` line only with `summary`."""
     paint = _Painter(color)
     ordered = _ordered(diags)
     out: list[str] = []
@@ -371,7 +372,7 @@ def render_human(diags: Diagnostics | Iterable[Diagnostic], color: bool) -> str:
         out.extend(_render_one(d, paint))
         out.append("")
     errors, warnings = _counts(ordered)
-    if errors or warnings:
+    if (errors or warnings) and summary:
         out.append(_summary(errors, warnings, paint))
     return "\n".join(out) + "\n" if out else ""
 
@@ -388,6 +389,44 @@ def render_short(diags: Diagnostics | Iterable[Diagnostic]) -> str:
         # One finding is one line, whatever its message holds.
         message = " ".join(d.message.splitlines())
         lines.append(f"{where}: {_title(d)}: {message}")
+    return "".join(line + "\n" for line in lines)
+
+
+# ---------------------------------------------------------------------------
+# GitHub Actions
+# ---------------------------------------------------------------------------
+
+_GITHUB_COMMAND = {Severity.ERROR: "error", Severity.WARNING: "warning", Severity.NOTE: "notice"}
+
+
+def _github_data(text: str) -> str:
+    """A workflow command's message: `%`, CR and LF escaped (in that order)."""
+    return text.replace("%", "%25").replace("\r", "%0D").replace("\n", "%0A")
+
+
+def _github_property(text: str) -> str:
+    """A workflow command's property value: also `:` and `,`, which end it."""
+    return _github_data(text).replace(":", "%3A").replace(",", "%2C")
+
+
+def render_github(diags: Diagnostics | Iterable[Diagnostic]) -> str:
+    """One GitHub Actions workflow command per finding (`::error file=...::message`),
+    which the Actions runner turns into an annotation on the line."""
+    lines = []
+    for d in _ordered(diags):
+        props = []
+        if d.span is not None:
+            end_line, end_col = d.span.end_line_col
+            props.append(f"file={_github_property(d.span.file.path)}")
+            props.append(f"line={d.span.line}")
+            props.append(f"col={d.span.col}")
+            props.append(f"endLine={end_line}")
+            if end_line == d.span.line:
+                props.append(f"endColumn={end_col}")
+        title = f"{d.code} {CODES[d.code].title}" if d.code in CODES else "rcsc"
+        props.append(f"title={_github_property(title)}")
+        message = d.message + "".join(f"\nnote: {n}" for n in d.notes) + "".join(f"\nhelp: {h}" for h in d.helps)
+        lines.append(f"::{_GITHUB_COMMAND.get(d.severity, 'notice')} {','.join(props)}::{escape_controls(_github_data(message))}")
     return "".join(line + "\n" for line in lines)
 
 
@@ -447,6 +486,7 @@ def _sarif_rule(code: Code) -> dict:
             "text": f"{explanation}\n\nrun `rcsc explain {code.code}` to read this in a terminal.",
             "markdown": f"**{code.code}: {code.title}**\n\n{explanation}",
         },
+        "helpUri": help_uri(code.code),
         "defaultConfiguration": {"level": _SARIF_LEVEL[code.severity]},
     }
 

@@ -89,8 +89,13 @@ def is_regular_file(path: str) -> bool:
         return False
 
 
-def write_file(path: str, data: bytes, may_replace: Callable[[str], bool] | None = None) -> None:
+def write_file(
+    path: str, data: bytes, may_replace: Callable[[str], bool] | None = None, mode: int | None = None
+) -> None:
     """Write `data` to `path` atomically (temporary file beside it, then rename).
+
+    The new file gets permission bits `mode` (default: 0o666 less the umask);
+    `rcsc fmt` passes the old file's, so that rewriting keeps them.
 
     `may_replace(path)` is asked when `path` exists as a regular file, and an
     existing link or special file is then refused.  Without `may_replace` (a
@@ -118,7 +123,7 @@ def write_file(path: str, data: bytes, may_replace: Callable[[str], bool] | None
     try:
         with os.fdopen(fd, "wb") as out:
             out.write(data)
-        os.chmod(tmp, 0o666 & ~_umask())
+        os.chmod(tmp, (0o666 & ~_umask()) if mode is None else mode)
         os.replace(tmp, path)
     except BaseException:
         _unlink_quietly(tmp)

@@ -36,7 +36,10 @@ def _parser() -> Lark:
     head = pkg.joinpath("scenario.lark").read_text(encoding="utf-8")
     design = pkg.joinpath("rcs.lark").read_text(encoding="utf-8")
     exprs = design[design.index("// ---- expressions") :]
-    return Lark(head + "\n" + exprs, parser="lalr", propagate_positions=True, maybe_placeholders=True)
+    from rcsc.grammar_cache import lark_cache
+
+    text = head + "\n" + exprs
+    return Lark(text, parser="lalr", propagate_positions=True, maybe_placeholders=True, cache=lark_cache("scenario", text))
 
 
 # The longest scenario: 2^32-1 cycles (over a year at 10 ms).  A longer count is

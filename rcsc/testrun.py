@@ -163,21 +163,50 @@ def _attr(text: str) -> str:
     return quoteattr(_xml_safe(text))
 
 
+def _is_error(o: Outcome) -> bool:
+    """A scenario that could not run (design or scenario with errors, unreadable
+    file) is a JUnit `error`; one that ran and missed an expectation a `failure`."""
+    return not o.passed and o.result is None
+
+
+def _error_text(o: Outcome) -> tuple[str, str]:
+    """The `message` (the first error, else the outcome's message) and the
+    text (the message, then every finding) of an `<error>`."""
+    from rcsc.render import render_short
+
+    if o.diags is None or not o.diags.items:
+        return (o.message.splitlines() or ["error"])[0], o.message
+    errors = [d for d in o.diags.sorted() if d.severity.value == "error"]
+    first = render_short(errors[:1] or o.diags.sorted()[:1]).strip()
+    return first, o.message + "\n" + render_short(o.diags)
+
+
 def to_junit(report: Report) -> str:
-    """JUnit XML: one testsuite per design, one testcase per scenario."""
+    """JUnit XML: one testsuite per design, one testcase per scenario.
+
+    A scenario that ran and missed an expectation is a `<failure>`; one that
+    could not run is an `<error>` whose message is the first finding and whose
+    text lists every finding (`file:line:col: severity[CODE]: message`)."""
     suites: dict[str, list[Outcome]] = {}
     for o in report.outcomes:
         suites.setdefault(o.design, []).append(o)
+    errors_total = sum(_is_error(o) for o in report.outcomes)
     out = ['<?xml version="1.0" encoding="UTF-8"?>']
-    out.append(f'<testsuites name="rcsc" tests="{len(report.outcomes)}" failures="{report.failed}">')
+    out.append(
+        f'<testsuites name="rcsc" tests="{len(report.outcomes)}" failures="{report.failed - errors_total}" errors="{errors_total}">'
+    )
     for design, items in suites.items():
-        fails = sum(not o.passed for o in items)
+        errs = sum(_is_error(o) for o in items)
+        fails = sum(not o.passed for o in items) - errs
         total = sum(o.seconds for o in items)
-        out.append(f'  <testsuite name={_attr(design)} tests="{len(items)}" failures="{fails}" time="{total:.3f}">')
+        out.append(f'  <testsuite name={_attr(design)} tests="{len(items)}" failures="{fails}" errors="{errs}" time="{total:.3f}">')
         for o in items:
             name = os.path.basename(o.scenario)
             out.append(f'    <testcase classname={_attr(design)} name={_attr(name)} file={_attr(o.scenario)} time="{o.seconds:.3f}">')
-            if not o.passed:
+            if _is_error(o):
+                first, body = _error_text(o)
+                out.append(f"      <error message={_attr(first)} type=\"rcsc\">{escape(_xml_safe(body))}</error>")
+            elif not o.passed:
                 first = o.message.splitlines()[0] if o.message else "failed"
                 out.append(f"      <failure message={_attr(first)}>{escape(_xml_safe(o.message))}</failure>")
             out.append("    </testcase>")

@@ -41,12 +41,15 @@ CASES = Path(__file__).parent / "cases"
 ROOT_FILE = "main.rcs"
 
 SIM_SCENARIO = "sim.scn"
+# A folder case with this file is checked under it, as `rcsc check` does
+# (annotations in it are `# expect: CODE @ LINE:COL`).
+CONFIG = "rcsc.toml"
 
 # Codes that no stage emits yet, so no case can expect them.  The coverage
 # test fails when a code here gets a case (remove it from this list then).
 PENDING: dict[str, str] = {}
 
-_EXPECT = re.compile(r"//\s*expect:\s*([EW]\d{4})\s*@\s*(\d+):(\d+)\s*$")
+_EXPECT = re.compile(r"(?://|#)\s*expect:\s*([EW]\d{4})\s*@\s*(\d+):(\d+)\s*$")
 
 
 def _roots() -> list[Path]:
@@ -61,7 +64,7 @@ def _roots() -> list[Path]:
 def _case_files(root: Path) -> list[Path]:
     if root.parent == CASES:
         return [root]
-    return sorted(root.parent.rglob("*.rcs")) + sorted(root.parent.rglob("*.scn"))
+    return sorted(root.parent.rglob("*.rcs")) + sorted(root.parent.rglob("*.scn")) + sorted(root.parent.glob(CONFIG))
 
 
 def _annotations(path: Path) -> list[tuple[str, int, int]]:
@@ -112,6 +115,11 @@ def _case_id(root: Path) -> str:
 def _check(root: Path):
     """The front end on the case's design, then its scenarios (if the design loaded)."""
     result = check_path(str(root))
+    if root.parent != CASES and (root.parent / CONFIG).is_file():
+        from rcsc import config
+
+        conf = config.load(str(root.parent / CONFIG), False, result.diags)
+        result.diags = conf.apply(result.diags)
     scenarios = sorted(root.parent.glob("*.scn")) if root.parent != CASES else []
     if scenarios and result.model is not None:
         from rcsc.scenario import text_to_scenario

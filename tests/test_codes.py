@@ -26,3 +26,21 @@ def test_explain_is_case_insensitive_and_rejects_unknown_codes() -> None:
     assert explain("e0100") == explain("E0100")
     assert explain("E0100").startswith("E0100 (error): unknown name\n\n")
     assert explain("E9999") is None
+
+
+def test_docs_codes_md_is_generated_from_the_table(request) -> None:
+    """docs/codes.md is the published page that SARIF helpUri links point into;
+    `--update-golden` regenerates it."""
+    import os
+    from pathlib import Path
+
+    from rcsc.codes import help_uri, markdown
+
+    page = Path(__file__).resolve().parent.parent / "docs" / "codes.md"
+    text = markdown()
+    for code in CODES:
+        assert f'<a id="{code.lower()}"></a>' in text
+        assert help_uri(code).endswith("/codes.html#" + code.lower())
+    if request.config.getoption("--update-golden") or os.environ.get("RCSC_UPDATE_GOLDEN") == "1":
+        page.write_text(text, encoding="utf-8", newline="\n")
+    assert page.exists() and page.read_text(encoding="utf-8") == text, "docs/codes.md is stale: run pytest --update-golden"

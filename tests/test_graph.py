@@ -281,7 +281,18 @@ def test_labels_are_shortened_and_quoted() -> None:
     short = graph.abbreviate("x" * 100, 20)
     assert len(short) == 20 and "..." in short
     assert graph.dot_quote('a "b" \\n\nc') == '"a \\"b\\" \\\\n\\nc"'
-    assert graph.mermaid_text('a < "b" | c#\nd') == "a #60; #34;b#34; #124; c#35;<br/>d"
+    assert graph.mermaid_text('a < "b" | c#\nd & e>') == "a #lt; #quot;b#quot; #124; c#35;<br/>d #amp; e#gt;"
+
+
+def test_mermaid_plan_uses_named_entities_and_one_loop_per_state() -> None:
+    """The submarine's TRANSIT plan: `>=`/`<` in guards, and two loops on UNDERWAY."""
+    result = checked("submarine")
+    sm = result.model.controllers["SM"]
+    text = graph.to_mermaid(graph.plan_graph(sm, sm.plans["TRANSIT"]))
+    assert "#60;" not in text and "#62;" not in text
+    assert '|"T0: cmd.speed #gt;= 0.0"|' in text and '|"T1: cmd.speed #lt; 0.0"|' in text
+    loops = [line for line in text.splitlines() if re.fullmatch(r"\s*(n\d+) -->\|.*\| \1", line)]
+    assert loops == ['  n2 -->|"T3: PR.AT_GOAL<br/>T4: not PR.AT_GOAL"| n2']
 
 
 def test_mermaid_structure() -> None:

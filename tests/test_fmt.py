@@ -1,0 +1,154 @@
+"""`rcsc fmt`: the canonical layout never changes what a file means.
+
+Every .rcs file of the repository and a few hundred generated designs (with
+random extra blanks, tabs and blank lines) are formatted; the syntax trees
+before and after must be equal (spans aside), formatting must be idempotent,
+and every comment must still be there, in order.  The examples and the
+standard library are kept formatted (`rcsc fmt --check` passes on them)."""
+
+from __future__ import annotations
+
+import os
+import random
+import re
+import stat
+from pathlib import Path
+
+import pytest
+
+from rcsc import cli
+from rcsc.diagnostics import Diagnostics
+from rcsc.fmt import format_text, shape
+from rcsc.parse import text_to_ast
+from rcsc.source import SourceFile
+
+ROOT = Path(__file__).resolve().parent.parent
+ALL_RCS = sorted(p for p in ROOT.rglob("*.rcs") if not any(part.startswith(".") for part in p.relative_to(ROOT).parts))
+_COMMENT = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
+
+
+def _tree(text: str):
+    return text_to_ast(SourceFile("x.rcs", text), Diagnostics())
+
+
+def _assert_round_trip(text: str, where: str) -> str:
+    before = _tree(text)
+    if before is None:
+        return text
+    out = format_text(text)
+    after = _tree(out)
+    assert after is not None, f"{where}: formatted text does not parse"
+    assert shape(after) == shape(before), f"{where}: formatting changed the syntax tree"
+    assert format_text(out) == out, f"{where}: formatting is not idempotent"
+    assert [c.rstrip() for c in _COMMENT.findall(out)] == [c.rstrip() for c in _COMMENT.findall(text)], f"{where}: comments changed"
+    return out
+
+
+def test_repository_has_designs_to_format() -> None:
+    assert len(ALL_RCS) > 50
+
+
+@pytest.mark.parametrize("path", ALL_RCS, ids=[str(p.relative_to(ROOT)) for p in ALL_RCS])
+def test_every_repository_file_round_trips(path: Path) -> None:
+    _assert_round_trip(path.read_text(encoding="utf-8"), str(path))
+
+
+def _perturb(text: str, r: random.Random) -> str:
+    out = []
+    for line in text.split("\n"):
+        if r.random() < 0.2:
+            line = r.choice(["\t", "  ", " "]) + line
+        if r.random() < 0.2:
+            line += r.choice([" ", "\t", "   "])
+        out.append(line)
+        if r.random() < 0.1:
+            out.append(r.choice(["", "   ", ""]))
+    return "\n".join(out)
+
+
+def test_generated_designs_round_trip() -> None:
+    from test_fuzz import DesignGen
+
+    parsed = 0
+    for seed in range(300):
+        text = _perturb(DesignGen(seed).design(), random.Random(seed))
+        if _tree(text) is not None:
+            parsed += 1
+            _assert_round_trip(text, f"seed {seed}")
+    assert parsed > 150
+
+
+def test_state_table_is_aligned_in_columns_and_comments_stay() -> None:
+    text = (
+        "design d\n\n\n\n"
+        "controller TOP level 1 budget 1 ms {  \n"
+        "\tverb RUN\n"
+        "  plan RUN {\n"
+        "   //  event | state -> next | jobs\n"
+        "E0: x > 1.0 | new -> S1 | x = 1.0, y = 2.0; // first\n"
+        "   E1:   x <= 1.0   |   S1 -> done;\n"
+        "     E2: otherwise | S1 -> error(3) | x = 0.0,\n"
+        "           y = 0.0;\n"
+        "  }\n"
+        "}\n"
+    )
+    assert format_text(text) == (
+        "design d\n\n"
+        "controller TOP level 1 budget 1 ms {\n"
+        "    verb RUN\n"
+        "    plan RUN {\n"
+        "        //  event | state -> next | jobs\n"
+        "        E0: x > 1.0   | new -> S1       | x = 1.0, y = 2.0; // first\n"
+        "        E1: x <= 1.0  | S1  -> done;\n"
+        "        E2: otherwise | S1  -> error(3) | x = 0.0,\n"
+        "                                          y = 0.0;\n"
+        "    }\n"
+        "}\n"
+    )
+
+
+def test_examples_and_stdlib_are_formatted(capsys) -> None:
+    assert cli.main(["fmt", "--check", str(ROOT / "examples"), str(ROOT / "stdlib")]) == 0
+    assert "0 files would be reformatted" in capsys.readouterr().err
+
+
+def test_fmt_writes_atomically_keeps_mode_and_check_diff_change_nothing(tmp_path: Path, capsys) -> None:
+    f = tmp_path / "d.rcs"
+    f.write_text("design d\nconst X: i32 = 1   \n\n\n\nconst Y: i32 = 2\n")
+    f.chmod(0o640)
+    assert cli.main(["fmt", "--check", str(f)]) == 1
+    assert cli.main(["fmt", "--diff", str(f)]) == 0
+    out = capsys.readouterr().out
+    assert "\n-const X: i32 = 1   \n" in out and "\n+const X: i32 = 1\n" in out
+    assert f.read_text().endswith("\n\n\n\nconst Y: i32 = 2\n")  # untouched so far
+    assert cli.main(["fmt", str(f)]) == 0
+    assert f.read_text() == "design d\nconst X: i32 = 1\n\nconst Y: i32 = 2\n"
+    assert stat.S_IMODE(f.stat().st_mode) == 0o640
+    assert not [p for p in os.listdir(tmp_path) if p != "d.rcs"]  # no temporary left behind
+    assert cli.main(["fmt", "--check", str(f)]) == 0
+
+
+def test_fmt_leaves_a_file_with_syntax_errors_alone(tmp_path: Path, capsys) -> None:
+    f = tmp_path / "bad.rcs"
+    f.write_text("design d\nconst X: i32 =   \n")
+    assert cli.main(["fmt", str(f)]) == 1
+    assert "error[E0001]" in capsys.readouterr().err
+    assert f.read_text() == "design d\nconst X: i32 =   \n"
+
+
+def test_fmt_refuses_to_replace_a_symbolic_link(tmp_path: Path, capsys) -> None:
+    target = tmp_path / "real.rcs"
+    target.write_text("design d\nconst X: i32 = 1   \n")
+    link = tmp_path / "link.rcs"
+    link.symlink_to(target)
+    assert cli.main(["fmt", str(link)]) == 2
+    assert link.is_symlink() and target.read_text().endswith("1   \n")
+    capsys.readouterr()
+
+
+def test_fmt_stdin_to_stdout(monkeypatch, capsys) -> None:
+    import io
+
+    monkeypatch.setattr("sys.stdin", io.StringIO("design d\n\n\n\nconst X: i32 = 1\t\n"))
+    assert cli.main(["fmt", "-"]) == 0
+    assert capsys.readouterr().out == "design d\n\nconst X: i32 = 1\n"
