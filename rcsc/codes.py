@@ -246,9 +246,30 @@ not queued, and the second would silently supersede the first.
 """),
     ("E0505", _E, "state waits on a subordinate but ignores its error", """
 A state has a rule that waits for `SUB.done` (or another status of SUB), but no
-rule that applies in this state tests `SUB.error`. If the subordinate fails, the
-plan waits forever - the defect of rcslib's generated INIT/HALT plans. Add a
-rule such as `E9: SUB.error | * -> error(1);`.
+rule that applies in this state tests `SUB.error`, and SUB can fail for a verb
+this controller sends it. If it fails, the plan waits forever. Reported once
+per plan and subordinate, at the first wait.
+
+SUB counts as able to fail for a verb when its plan for that verb has an
+`error(...)` rule (or reports ERROR), when SUB is a `simulator` (a plant model
+that a deployment replaces by the real plant), or when the design has no plan
+for the verb. A subordinate whose plans always end in `done` (the INIT and HALT
+plans that NIST's RCS-Design tool generates) needs no error rule.
+
+Wrong:
+
+    plan RUN {
+        E0: true     | new -> S1 | LOW.GO();
+        E1: LOW.done | S1  -> done;      // LOW.GO can end in error(4)
+    }
+
+Fixed (the `*` error rule right after the `new` rules):
+
+    plan RUN {
+        E0: true      | new -> S1 | LOW.GO();
+        E9: LOW.error | *   -> error(4);
+        E1: LOW.done  | S1  -> done;
+    }
 """),
     ("E0506", _E, "rule can never fire", """
 Earlier rules of the same state always match first (first match wins), so this
