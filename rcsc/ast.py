@@ -181,6 +181,7 @@ class GmVar(Node):
     type: TypeRef
     init: Expr | None
     from_env: bool
+    to_env: bool = False  # `to env`: an output the environment reads (an actuator)
 
 
 @dataclass

@@ -221,6 +221,16 @@ value readers see before the first write.
     ("W0403", _W, "Global Memory variable is never read", """
 A variable that nobody reads is dead data in every cycle's buffer exchange.
 Remove it, or add it to the `reads` of the controller that is meant to use it.
+An actuator output that goes to the plant through the I/O hooks is read by the
+environment: declare it `to env` (the mirror of `from env`).
+
+Wrong:
+
+    gm valve_cmd: f64 = 0.0        // written by FILL, sent to the valve
+
+Fixed:
+
+    gm valve_cmd: f64 = 0.0 to env
 """),
     # ---- plans --------------------------------------------------------------
     ("E0500", _E, "verb has no plan", """

@@ -185,7 +185,7 @@ class _Sema:
                         self.d.add("E0101", v.name.span, f"verb `{v.name.name}` is declared more than once in verb set `{name}`", "repeated verb")
             elif isinstance(item, ast.GmVar):
                 t = self.type_ref(item.type)
-                var = m.Var(name, t, item.span, from_env=item.from_env)
+                var = m.Var(name, t, item.span, from_env=item.from_env, to_env=item.to_env)
                 var.range = self.range_of(item.type, t, const_checker)
                 if item.init is None:
                     self.d.add("E0402", item.name.span, f"Global Memory variable `{name}` has no initial value", "no initial value").with_help(
