@@ -42,6 +42,9 @@ W0515 (warning) order-dependent rules
       its priority is the point;
     - when the later rule can never fire in that state (e.g. a `*` error rule
       in `new`, hidden by `new` rules that cover every input);
+    - in `new`, between a `new` rule and a `*` rule after it: the `*` rule
+      fires in `new` only where the `new` rules leave a gap, which E0516
+      reports once (not once per `*` rule);
     - once per pair of rules, not once per state.
 E0516 (error) a new command can go unanswered
     Inputs for which no rule of `new` fires and `new` has no `otherwise`: the
@@ -181,6 +184,25 @@ def check(design: Design, diags: Diagnostics, options: Options | None = None, st
             st.plans += 1
             _analyse_plan(design, c, plan, assigned, opts, st, diags, cache)
     st.seconds += time.perf_counter() - t0
+
+
+def params_may_be_nan(design: Design, c: m.Controller, verb: str) -> bool:
+    """Whether an f64 parameter of `c`'s verb can be NaN.
+
+    Operator commands (scenarios, the top controller's command input) carry
+    numbers, never NaN (a scenario's NaN argument is refused, E0206), so the
+    parameters of a verb can be NaN only when a supervisor in the design
+    sends that verb: its argument may be computed from a NaN reading.
+    """
+    sup = design.controllers.get(c.supervisor) if c.supervisor else None
+    if sup is None:
+        return False
+    return any(
+        isinstance(job, m.Command) and job.sub == c.name and job.verb == verb
+        for plan in sup.plans.values()
+        for r in plan.rules
+        for job in m.walk_stmts(r.jobs)
+    )
 
 
 def _new_solver(opts: Options) -> z3.Solver:
@@ -331,7 +353,7 @@ class _Analysis:
         verb = c.verbs.get(plan.verb)
         cpu = design.cpus.get(c.cpu) if c.cpu else None
         self.period = cpu.heartbeat_ns if cpu is not None else None
-        self.enc = Encoder(design, c, verb, self.period)
+        self.enc = Encoder(design, c, verb, self.period, nan_params=params_may_be_nan(design, c, plan.verb))
         self.guarded = [r for r in plan.rules if r.guard is not None]
         self.encs: dict[int, Encoding] = {}
         for r in self.guarded:
@@ -637,6 +659,12 @@ class _Analysis:
                             continue
                         if not self._live(rj, s, live):
                             continue
+                        if s == "new" and ri.state.kind == "new" and rj.state.kind == "any":
+                            # A `*` rule after the `new` rules (the fault-rule
+                            # idiom) fires in `new` only where the `new` rules
+                            # leave a gap: that gap is E0516 (once), not an
+                            # overlap per `*` rule.
+                            continue
                         before = [x.index for x in self.rules_in[s] if x.index < ri.index]
                         lits = {i: False for i in before}
                         lits[ri.index] = True
@@ -658,6 +686,23 @@ class _Analysis:
         res = self.query(lits, f"whether `{r.label}` can fire in state `{s}`", r.label_span)
         live[(r.index, s)] = isinstance(res, _Sat)
         return live[(r.index, s)]
+
+    def _duration_cap(self, key: tuple) -> list:
+        """A fixed duration without a declared range is at most the longest time in state.
+
+        `in_state` counts whole heartbeats in 64-bit nanoseconds, so it stops
+        short of 2^63 ns (292 years).  A wait `in_state >= cmd.t` ends for every
+        duration it can count; a longer one is not a design's wait but the
+        limit of the counter, so it is not a witness of waiting for ever.
+        """
+        inp = self.enc.inputs[key]
+        if inp.type != DURATION or len(key) != 2:
+            return []
+        var = _var_of(self.design, self.c, self.plan, key[0], key[1])
+        if var is None or var.range is not None:
+            return []
+        period = self.period or 1
+        return [inp.term <= (2**63 - 1) // period * period]
 
     def forever(self, s: str, rules: list[m.Rule]) -> _Finding | None:
         """Exists fixed inputs such that for all other inputs no rule of `s` fires."""
@@ -686,6 +731,7 @@ class _Analysis:
         try:
             for k in fixed:
                 solver.add(self.enc.inputs[k].constraint)
+                solver.add(*self._duration_cap(k))
             solver.add(formula)
             self.st.queries += 1
             self.st.forall_queries += 1
@@ -773,7 +819,7 @@ class _Canon:
     def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, period) -> None:
         self.design, self.c = design, c
         self.keys: dict[tuple, int] = {}
-        self.parts: list = [plan.ordered, period]
+        self.parts: list = [plan.ordered, period, params_may_be_nan(design, c, plan.verb)]
         verb = c.verbs.get(plan.verb)
         self.params = {p.name: p for p in verb.params} if verb else {}
         self.assigned = assigned
