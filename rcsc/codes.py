@@ -67,6 +67,22 @@ deep (for example a sum of hundreds of terms written on one line). rcsc refuses
 it rather than risk running out of stack in later passes. Compute parts of the
 expression in locals or move them into functions.
 """),
+    ("W0008", _W, "malformed or unused suppression", """
+A comment `// rcsc: allow(CODE) reason` suppresses the CODE findings that start
+on its line (or, when it stands alone on its line, on the next line). It must
+name known warning codes (an error cannot be allowed), give a reason, and
+cover a finding; otherwise it is reported, so that stale or careless
+suppressions do not pile up. Suppressed findings stay in the SARIF report,
+marked as suppressed in the source with their reason.
+
+Wrong:
+
+    F3: level >= 2.0 | S1 -> done;   // rcsc: allow(W0515)
+
+Fixed:
+
+    F3: level >= 2.0 | S1 -> done;   // rcsc: allow(W0515) the arrival wins over the time-out on purpose
+"""),
     # ---- names --------------------------------------------------------------
     ("E0100", _E, "unknown name", """
 A name is used that is not declared where it is used. Inside a controller the

@@ -10,6 +10,7 @@ from __future__ import annotations
 import gc
 from dataclasses import dataclass
 
+from rcsc import suppress
 from rcsc.checks import check_model
 from rcsc.diagnostics import Diagnostics
 from rcsc.loader import InputError, LoadedFile, path_to_files
@@ -53,4 +54,7 @@ def _check_path(path: str) -> CheckResult:
         return CheckResult(diags, None, files)
     design = ast_to_model(files, diags)
     check_model(design, diags)
+    # Unused suppressions are reported only when the checks all ran (errors
+    # stop the guard analysis, whose findings an `allow` may be waiting for).
+    suppress.apply([f.source for f in files], diags, report_unused=not diags.has_errors())
     return CheckResult(diags, design, files)
