@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from rcsc import suppress
 from rcsc.checks import check_model
 from rcsc.diagnostics import Diagnostics
+from rcsc.hints import add_hints
 from rcsc.loader import InputError, LoadedFile, path_to_files
 from rcsc.model import Design
 from rcsc.sema import ast_to_model
@@ -51,10 +52,12 @@ def _check_path(path: str) -> CheckResult:
     if any(f.tree is None for f in files):
         # A file that does not parse leaves holes that would only produce
         # follow-on findings; report the syntax errors alone.
+        add_hints(diags, None)
         return CheckResult(diags, None, files)
     design = ast_to_model(files, diags)
     check_model(design, diags)
     # Unused suppressions are reported only when the checks all ran (errors
     # stop the guard analysis, whose findings an `allow` may be waiting for).
     suppress.apply([f.source for f in files], diags, report_unused=not diags.has_errors())
+    add_hints(diags, design)
     return CheckResult(diags, design, files)

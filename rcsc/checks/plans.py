@@ -16,6 +16,7 @@ import networkx as nx
 
 from rcsc import model as m
 from rcsc.diagnostics import Diagnostics
+from rcsc.hints import closest
 from rcsc.model import Design
 
 MAX_RULES = 10
@@ -124,6 +125,9 @@ def _check_plan(design: Design, c: m.Controller, plan: m.Plan, diags: Diagnostic
         if ref is not None:
             diag = diags.add("E0502", ref.span, f"state `{s}` of plan `{plan.verb}` is unreachable from `new`", "unreachable state")
             diag.with_note("no rule leads here from the entry state")
+            typo = closest(s, [x for x in plan.states if x in reachable] + ["done"])
+            if typo is not None:
+                diag.with_help(f"did you mean `{typo}`? A misspelt state name makes a new state")
             after = sorted(nx.descendants(g, s) & set(unreachable))
             if after:
                 diag.with_note("so are the states it leads to: " + ", ".join(f"`{x}`" for x in after))
