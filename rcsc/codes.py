@@ -332,6 +332,78 @@ A controller has two plans with the same name. Each verb has exactly one plan
 (its state table), so a second plan for the same verb is either a leftover copy
 or a misspelt verb name.
 """),
+    ("W0519", _W, "command storm: a rule re-commands a subordinate every cycle", """
+A rule that stays in its state (`-> *` or `S1 -> S1`) and commands a
+subordinate, without testing that subordinate's status in its condition, fires
+again in the next cycle and sends the command again. Commands are not queued:
+each one supersedes the last, so the subordinate restarts its plan every cycle
+and never finishes.
+
+Wrong:
+
+    E1: level < 1.0 | FILLING -> * | VALVE.OPEN();
+
+Fixed (command once on the way in, then wait):
+
+    E0: true             | new     -> FILLING | VALVE.OPEN();
+    E1: VALVE.error      | *       -> error(2);
+    E2: level >= 1.0     | FILLING -> done;
+"""),
+    ("W0520", _W, "`*` rule that tests a subordinate comes before the `new` rules", """
+When a new command arrives, a subordinate's status still answers the previous
+command (DONE and ERROR stay until it is commanded again). A `*` rule that
+tests a subordinate, written before the rules for `new`, can fire in `new` on
+that stale status instead of the entry rule. Put `*` fault rules right after
+the `new` rules.
+
+Wrong:
+
+    E9: LOW.error | *   -> error(1);
+    E0: true      | new -> S1 | LOW.GO();
+
+Fixed:
+
+    E0: true      | new -> S1 | LOW.GO();
+    E9: LOW.error | *   -> error(1);
+"""),
+    ("W0521", _W, "plan reports done while a subordinate may still be executing", """
+A rule ends the plan with `done` in a state that was entered by commanding a
+subordinate (or commands it itself), and its condition does not test that
+subordinate. The supervisor then hears DONE while the delegated work is still
+under way.
+
+Wrong:
+
+    E0: true          | new -> MOVING | AXIS.MOVE(x = 10.0);
+    E1: in_state >= 2 s | MOVING -> done;
+
+Fixed:
+
+    E0: true          | new -> MOVING | AXIS.MOVE(x = 10.0);
+    E9: AXIS.error    | *   -> error(3);
+    E1: AXIS.done     | MOVING -> done;
+"""),
+    ("W0522", _W, "plan waits on a subordinate it never commands", """
+A condition tests `SUB.done` (or `SUB.executing`, or an extra status of SUB),
+but no rule of the plan commands SUB. SUB's status answers an earlier command,
+from another plan or another run of this one, or none at all: the wait ends at
+once on a stale DONE, or never.
+
+Wrong:
+
+    plan UNLOAD {
+        U0: true     | new -> S1;
+        U1: ARM.done | S1  -> done;
+    }
+
+Fixed:
+
+    plan UNLOAD {
+        U0: true      | new -> S1 | ARM.PLACE();
+        U9: ARM.error | *   -> error(2);
+        U1: ARM.done  | S1  -> done;
+    }
+"""),
     # ---- guards (z3): determinism and coverage of state tables ------------------
     ("E0513", _E, "condition is never true", """
 The guard analysis proved that no input makes this rule's condition true, given
