@@ -476,6 +476,37 @@ The reference simulator (`rcsc sim`, `rcsc test`) steps one CPU's schedule. A
 design with several CPUs is checked, but simulating the buffer exchange between
 CPUs is not implemented yet.
 """),
+    ("W0610", _W, "a period constant differs from the heartbeat", """
+A constant named as a time step (DT, TS, PERIOD, CYCLE, SAMPLE_TIME, TICK, or
+ending in _DT or _PERIOD), in seconds (f64) or as a duration, is used by a
+controller whose CPU beats at another period. A plant model or filter that
+integrates with it is off by the ratio in every cycle.
+
+Wrong:
+
+    const DT: f64 = 0.03              // written for a 30 ms heartbeat
+    cpu MAIN { heartbeat 10 ms  schedule TANK }
+
+Fixed:
+
+    const DT: f64 = 0.01
+    cpu MAIN { heartbeat 10 ms  schedule TANK }
+"""),
+    ("E0611", _E, "an extern's budget does not fit in the caller's budget", """
+An `extern fn` declares its worst-case time with `budget`. A controller that
+calls an extern taking longer than its own whole step, or whose `pre` and
+`post` call externs that together take longer, cannot keep its declared
+budget, so the CPU budget check (E0600) would rest on a false number.
+
+Wrong:
+
+    extern fn solve_ik(x: f64) -> f64 budget 2 ms
+    controller ARM level 1 budget 500 us { ... solve_ik(goal) ... }
+
+Fixed:
+
+    controller ARM level 1 budget 3 ms { ... solve_ik(goal) ... }
+"""),
     # ---- code generation ----------------------------------------------------
     ("E0800", _E, "the target cannot build a design with several CPUs", """
 `rcsc build` generates one Main Program per CPU, but the buffers that
