@@ -404,6 +404,22 @@ Fixed:
         U1: ARM.done  | S1  -> done;
     }
 """),
+    ("W0523", _W, "exact `==` on f64 in a condition", """
+A measured or computed `f64` is almost never exactly equal to a value: a level
+that passes 2.0 between two cycles is never `== 2.0`, and the rule never fires.
+Compare with a tolerance or an inequality. When exact equality is meant (a
+value copied unchanged, a flag stored as 0.0 or 1.0), say so on the line with
+`// rcsc: allow(W0523) reason`.
+
+Wrong:
+
+    E1: level == 2.0 | FILLING -> done;
+
+Fixed:
+
+    E1: level >= 2.0 | FILLING -> done;
+    E1: abs(level - 2.0) <= 0.01 | FILLING -> done;
+"""),
     # ---- guards (z3): determinism and coverage of state tables ------------------
     ("E0513", _E, "condition is never true", """
 The guard analysis proved that no input makes this rule's condition true, given
