@@ -138,6 +138,11 @@ def _plan(i: int, verb: str, subs: list[int], r: int, hb: int, continuous: bool,
     if subs:
         setup.append(f"{me}_sp = target")
     cmds = [f"{n}.{verb}({_command_args(verb, k)})" for k, n in enumerate(sub_names)]
+    if r <= 2:
+        # Too few rules to wait for the subordinates: a plan that commanded
+        # them and finished at once would report done while they still work
+        # (W0521), so these plans do their own part only.
+        cmds = []
 
     if r == 1:
         return f"    plan {verb} {{\n        E0: true | new -> done | {', '.join(setup + cmds)};\n    }}\n"

@@ -420,6 +420,41 @@ Fixed:
     E1: level >= 2.0 | FILLING -> done;
     E1: abs(level - 2.0) <= 0.01 | FILLING -> done;
 """),
+    ("W0524", _W, "value can be outside its declared range", """
+A job list puts a value into a ranged slot - an argument for a parameter
+declared `x: i32 in 0..10`, an assignment to a ranged local, status field or
+Global Memory variable - and for the inputs shown as witness (with the rule's
+condition true and the earlier rules of its state false) the value is outside
+the range. The checks of the receiving plan assume the range (a command with
+x = 20 can leave every rule of `new` false, and the plan sits there for ever),
+so the range must be kept where values enter it.
+
+Wrong:
+
+    verb GO(x: i32 in 0..10)               // of LOW
+    E0: true | new -> S1 | LOW.GO(x = n + 1);
+
+Fixed:
+
+    E0: n < 10 | new -> S1 | LOW.GO(x = n + 1);
+    E1: otherwise | new -> error(2);
+"""),
+    ("W0525", _W, "integer overflow or division by zero", """
+For the inputs shown as witness, integer arithmetic in a condition or a job
+list wraps around its type (`+`, `-`, `*` on i32, i64, u32 or durations), or
+`/` or `%` divides by zero, which gives 0 by the language's rules. Either is
+rarely what the designer meant. Bound the operands with a range or a test in
+the condition, or use a wider type.
+
+Wrong:
+
+    E1: true | S1 -> done | rate = total / count;
+
+Fixed:
+
+    E1: count > 0 | S1 -> done | rate = total / count;
+    E2: otherwise | S1 -> error(4);
+"""),
     # ---- guards (z3): determinism and coverage of state tables ------------------
     ("E0513", _E, "condition is never true", """
 The guard analysis proved that no input makes this rule's condition true, given

@@ -7,11 +7,11 @@ the timing check, which records each controller's CPU, for later stages).
 
 from __future__ import annotations
 
-from rcsc.checks import commands, cycle, floats, guards, hierarchy, ownership, plans, timing
+from rcsc.checks import commands, cycle, floats, guards, hierarchy, ownership, plans, timing, values
 from rcsc.diagnostics import Diagnostics
 from rcsc.model import Design
 
-FAMILIES = (hierarchy, ownership, plans, commands, floats, timing, cycle, guards)
+FAMILIES = (hierarchy, ownership, plans, commands, floats, timing, cycle, guards, values)
 
 
 def check_model(design: Design, diags: Diagnostics) -> None:

@@ -197,12 +197,37 @@ def params_may_be_nan(design: Design, c: m.Controller, verb: str) -> bool:
     sup = design.controllers.get(c.supervisor) if c.supervisor else None
     if sup is None:
         return False
-    return any(
-        isinstance(job, m.Command) and job.sub == c.name and job.verb == verb
-        for plan in sup.plans.values()
-        for r in plan.rules
-        for job in m.walk_stmts(r.jobs)
-    )
+    for plan in sup.plans.values():
+        for r in plan.rules:
+            for job in m.walk_stmts(r.jobs):
+                if isinstance(job, m.Command) and job.sub == c.name and job.verb == verb:
+                    if any(_may_be_nan(design, sup, plan, a) for a in job.args):
+                        return True
+    return False
+
+
+def _may_be_nan(design: Design, c: m.Controller, plan: m.Plan, e: m.Expr) -> bool:
+    """Whether a supervisor's argument can carry a NaN into a command.
+
+    A NaN enters from outside or from arithmetic that makes one: a Global
+    Memory value (a sensor, another controller's output), an extern's
+    result, an f64 division, or a parameter that can itself be NaN.  The
+    controller's own locals and status fields are taken as numbers: they
+    hold what its own jobs computed from those sources, and a NaN there is
+    reported where it enters.
+    """
+    for x in m.walk_expr(e):
+        if not isinstance(x.type, FloatType) and not isinstance(x.type, RecordType):
+            continue
+        if isinstance(x, m.Ref) and x.kind == "gm":
+            return True
+        if isinstance(x, m.Call) and x.kind == "extern":
+            return True
+        if isinstance(x, m.Binary) and x.op == "/":
+            return True
+        if isinstance(x, m.Ref) and x.kind == "param" and params_may_be_nan(design, c, plan.verb):
+            return True
+    return False
 
 
 def _new_solver(opts: Options) -> z3.Solver:
