@@ -620,10 +620,17 @@ class _Analysis:
             f = _Finding("E0506", [r.index], covering=sorted(covering))
             if example is not None:
                 s, before = example
-                res = self.query({r.index: True}, f"an example for `{r.label}`", r.label_span)
+                # The witness shows one of the rules the note names firing:
+                # the earlier rules the note does not name are kept false
+                # (else the witness could show a third rule firing first).
+                ask = {r.index: True} | {i: False for i in before if i not in covering}
+                res = self.query(ask, f"an example for `{r.label}`", r.label_span)
+                if not isinstance(res, _Sat):
+                    ask = {r.index: True}
+                    res = self.query(ask, f"an example for `{r.label}`", r.label_span)
                 if isinstance(res, _Sat):
                     upto = [x.index for x in self.rules_in[s] if x.index <= r.index]
-                    f.witness, f.externs, model = self.witness(res.model, upto, self.lits({r.index: True}))
+                    f.witness, f.externs, model = self.witness(res.model, upto, self.lits(ask))
                     f.state = s
                     f.fires = next((i for i in before if z3.is_true(model.eval(self.p[i], model_completion=True))), None)
             f.approx = self.approx([r.index] + f.covering)
