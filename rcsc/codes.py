@@ -471,11 +471,28 @@ catch everything, write `true`; otherwise the condition is not what was meant.
     ("W0515", _W, "rules of a state can both be true with different outcomes", """
 Two rules of one state can both be true for the same input (and no earlier rule
 is), and they lead to different next states or jobs: the order of the table
-silently decides which one fires. The witness is such an input. Make the
-conditions exclusive, or declare the plan `ordered` (`plan X ordered { ... }`)
-to state that the table is prioritized on purpose. Not reported when the earlier
-rule leads to `error(...)`: a fault or time-out rule written first is the
-paper's prioritized style.
+silently decides which one fires. The witness is such an input, and the notes
+say how the two rules differ.
+
+Most overlaps are bugs - an off-by-one (`>= 50` and `<= 60`), a missing
+`and not ...`, a command storm - and the fix is to make the conditions
+exclusive. When the earlier rule must win on purpose, say so for that pair with
+`// rcsc: allow(W0515) reason` on the later rule's line. `plan X ordered`
+declares the whole table prioritized and hides every overlap, real bugs
+included: keep it for tables written as a priority list. Not reported when the
+earlier rule leads to `error(...)` (a fault or time-out rule written first is
+the paper's prioritized style), nor between a `new` rule and a later `*` rule
+in `new` (a gap there is E0516, reported once).
+
+Wrong:
+
+    E1: level >= 50 | S1 -> done;
+    E2: level <= 60 | S1 -> S2;        // 50..60: E1 wins by position
+
+Fixed:
+
+    E1: level > 60  | S1 -> done;
+    E2: level <= 60 | S1 -> S2;
 """),
     ("E0516", _E, "a new command can leave every rule of `new` false", """
 For the input shown as witness no rule of state `new` (nor any `*` rule) fires,

@@ -338,6 +338,23 @@ def _next_text(rule: m.Rule) -> str:
     return str(rule.next)
 
 
+def _difference(a: m.Rule, b: m.Rule, state: str) -> str:
+    """What two rules do differently: next state, jobs, or both."""
+    parts = []
+    if _target(a, state) != _target(b, state):
+        parts.append(f"the next state ({_next_text(a)} / {_next_text(b)})")
+    if _skey(a.jobs) != _skey(b.jobs):
+        parts.append(f"their jobs ({_jobs_text(a)} / {_jobs_text(b)})")
+    return " and ".join(parts) or "their outcome"
+
+
+def _jobs_text(rule: m.Rule) -> str:
+    if not rule.jobs:
+        return "none"
+    spans = [j.span for j in rule.jobs]
+    return spans[0].to(spans[-1]).text if spans[0].file is spans[-1].file else "..."
+
+
 # ---- the per-plan analysis -----------------------------------------------------------------
 
 
@@ -1059,7 +1076,12 @@ def _report(design: Design, c: m.Controller, plan: m.Plan, f: _Finding, diags: D
         d = diags.add("W0515", main.label_span, f"rules `{first.label}` and `{main.label}` can both be true in state `{f.state}`", "also true")
         d.with_label(first.label_span, f"`{first.label}` fires first")
         d.with_note(f"`{first.label}` (-> {_next_text(first)}) fires and `{main.label}` (-> {_next_text(main)}) does not: the order of the table decides")
-        d.with_help(f"make the conditions exclusive, or declare `plan {plan.verb} ordered` if the order is intended")
+        d.with_note(f"they differ in {_difference(first, main, f.state or '')}")
+        d.with_help(f"if neither should win for this input (an off-by-one, a missing `and not ...`), make the conditions exclusive")
+        d.with_help(
+            f"if `{first.label}` must win (a priority), say so here with `// rcsc: allow(W0515) why` on `{main.label}`'s line; "
+            f"`plan {plan.verb} ordered` declares every overlap of the table intended and hides real ones too"
+        )
     else:  # pragma: no cover
         raise KeyError(f.code)
     if f.witness:
