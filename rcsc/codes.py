@@ -455,6 +455,26 @@ Fixed:
     E1: count > 0 | S1 -> done | rate = total / count;
     E2: otherwise | S1 -> error(4);
 """),
+    ("W0526", _W, "loop of states can only be left through an error", """
+The plan can end in `done`, but from a loop of states every way out leads to
+`error(...)`: once in the loop, the command can only fail. Usually the rule
+that leaves the loop on success is missing or its next state is misspelt (a
+misspelt name makes a new state), or the loop's only exits are `*` fault
+rules. A plan that always fails (an ABORT) and a `continuous` plan are not
+reported.
+
+Wrong:
+
+    E0: true          | new  -> MOVE | AX.GO();
+    E9: AX.error      | *    -> error(1);
+    E1: AX.done       | MOVE -> WAIT | AX.GO();
+    E2: AX.done       | WAIT -> MOVE | AX.GO();
+
+Fixed:
+
+    E2: AX.done and n >= 3 | WAIT -> done;
+    E3: AX.done and n < 3  | WAIT -> MOVE | AX.GO(), n += 1;
+"""),
     # ---- guards (z3): determinism and coverage of state tables ------------------
     ("E0513", _E, "condition is never true", """
 The guard analysis proved that no input makes this rule's condition true, given

@@ -125,8 +125,12 @@ def _check_plan(design: Design, c: m.Controller, plan: m.Plan, diags: Diagnostic
         if ref is not None:
             diag = diags.add("E0502", ref.span, f"state `{s}` of plan `{plan.verb}` is unreachable from `new`", "unreachable state")
             diag.with_note("no rule leads here from the entry state")
+            own = {r.state.name for r in plan.rules if r.state.kind == "named"}
+            orphan = closest(s, [x for x in plan.states if x in reachable and x not in own])
             typo = closest(s, [x for x in plan.states if x in reachable] + ["done"])
-            if typo is not None:
+            if orphan is not None:
+                diag.with_help(f"a rule leads to `{orphan}`, which has no rules of its own: did you mean `{s}` there? A misspelt next state makes a new state")
+            elif typo is not None:
                 diag.with_help(f"did you mean `{typo}`? A misspelt state name makes a new state")
             after = sorted(nx.descendants(g, s) & set(unreachable))
             if after:
@@ -142,11 +146,32 @@ def _check_plan(design: Design, c: m.Controller, plan: m.Plan, diags: Diagnostic
             if before:
                 diag.with_note("states that lead here cannot finish either: " + ", ".join(f"`{x}`" for x in before))
             diag.with_help(f"add a rule that leads to `done` or `error(...)`, or declare `plan {plan.verb} continuous`")
+        _check_fail_only(plan, g, reachable, ends, diags)
 
     _check_shadowing(plan, states, diags)
     _check_otherwise(plan, diags)
     _check_commands(plan, diags)
     _check_error_handling(design, c, plan, states, diags)
+
+
+def _check_fail_only(plan: m.Plan, g: nx.MultiDiGraph, reachable: set[str], ends: set[str], diags: Diagnostics) -> None:
+    """W0526: a loop of states whose only ways out fail, in a plan that can succeed."""
+    succeed = nx.ancestors(g, DONE)
+    fail_only = [s for s in plan_states(plan) if s in reachable and s in ends and s not in succeed]
+    if not fail_only or "new" in fail_only:
+        # A plan that always fails (an ABORT) is a design choice, not a loop.
+        return
+    sub = nx.DiGraph(g.subgraph(fail_only))
+    for comp in nx.strongly_connected_components(sub):
+        if len(comp) < 2:
+            continue
+        first = min(comp, key=fail_only.index)
+        ref = _first_mention(plan, first)
+        span = ref.span if ref is not None else plan.name_span
+        names = ", ".join(f"`{x}`" for x in sorted(comp, key=fail_only.index))
+        diag = diags.add("W0526", span, f"the loop {names} of plan `{plan.verb}` can only be left through `error(...)`", "only fails")
+        diag.with_note("no rule of the loop leads towards `done`: once entered, the command can only fail")
+        diag.with_help("add the rule that leaves the loop on success, or correct a misspelt next state")
 
 
 def literal_dead_rules(plan: m.Plan, states: list[str] | None = None) -> dict[int, m.Rule]:
