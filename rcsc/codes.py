@@ -455,6 +455,24 @@ Fixed:
     E1: count > 0 | S1 -> done | rate = total / count;
     E2: otherwise | S1 -> error(4);
 """),
+    ("W0527", _W, "error exit leaves a commanded subordinate running", """
+A rule ends the plan with `error(...)` in a state that was entered by
+commanding a subordinate, its condition tests no subordinate (a time-out, a
+sensor fault), and it does not command the subordinate again (to stop it). The
+supervisor hears ERROR while the subordinate goes on with work nobody
+supervises any more: a time-out that leaves an axis moving. (A rule that
+reacts to one subordinate's failure while another finishes its part is not
+reported.)
+
+Wrong:
+
+    E0: true            | new    -> MOVING | AXIS.MOVE(x = 10.0);
+    E8: in_state >= 5 s | MOVING -> error(2);
+
+Fixed:
+
+    E8: in_state >= 5 s | MOVING -> error(2) | AXIS.HALT();
+"""),
     ("W0526", _W, "loop of states can only be left through an error", """
 The plan can end in `done`, but from a loop of states every way out leads to
 `error(...)`: once in the loop, the command can only fail. Usually the rule

@@ -109,6 +109,8 @@ def _finish_while_busy(plan: m.Plan, states: list[str], diags: Diagnostics) -> N
             for cmd in _commands(r):
                 entering.setdefault(t, {}).setdefault(cmd.sub, cmd)
     for r in plan.rules:
+        if r.next.kind == "error":
+            _error_leaves_running(r, states, entering, diags)
         if r.next.kind != "done":
             continue
         tested = _tested(r)
@@ -125,6 +127,31 @@ def _finish_while_busy(plan: m.Plan, states: list[str], diags: Diagnostics) -> N
             diag.with_label(cmd.span, f"`{sub}` commanded here")
             diag.with_note(f"the supervisor hears DONE while `{sub}.{cmd.verb}` can still be under way")
             diag.with_help(f"wait for it: add `{sub}.done` to the condition (and handle `{sub}.error`)")
+
+
+def _error_leaves_running(r: m.Rule, states: list[str], entering: dict[str, dict[str, m.Command]], diags: Diagnostics) -> None:
+    """W0527: an error exit that neither tests nor stops a subordinate commanded on the way in.
+
+    Only exits whose condition tests no subordinate (a time-out, a sensor
+    fault): a rule reacting to one subordinate's failure while another
+    finishes its part is how parallel INIT plans are written.
+    """
+    tested = _tested(r)
+    if tested:
+        return
+    stopped = {cmd.sub for cmd in _commands(r)}
+    busy: dict[str, tuple[str, m.Command]] = {}
+    for s in rule_sources(r, states):
+        for sub, cmd in entering.get(s, {}).items():
+            busy.setdefault(sub, (s, cmd))
+    for sub, (s, cmd) in busy.items():
+        if sub in tested or sub in stopped:
+            continue
+        where = f"in state `{s}`" if r.state.kind == "any" else ""
+        diag = diags.add("W0527", r.label_span, f"rule `{r.label}` fails the plan {where} while `{sub}` may still be executing".replace("  ", " "), "leaves it running")
+        diag.with_label(cmd.span, f"`{sub}` commanded here")
+        diag.with_note(f"the supervisor hears ERROR while `{sub}.{cmd.verb}` goes on, unsupervised")
+        diag.with_help(f"stop it in the same rule (e.g. `{sub}.HALT()`), or test `{sub}` in the condition")
 
 
 def _never_commanded(plan: m.Plan, diags: Diagnostics) -> None:
