@@ -144,14 +144,17 @@ def _error_leaves_running(r: m.Rule, states: list[str], entering: dict[str, dict
     for s in rule_sources(r, states):
         for sub, cmd in entering.get(s, {}).items():
             busy.setdefault(sub, (s, cmd))
-    for sub, (s, cmd) in busy.items():
-        if sub in tested or sub in stopped:
-            continue
-        where = f"in state `{s}`" if r.state.kind == "any" else ""
-        diag = diags.add("W0527", r.label_span, f"rule `{r.label}` fails the plan {where} while `{sub}` may still be executing".replace("  ", " "), "leaves it running")
+    running = [(sub, s, cmd) for sub, (s, cmd) in busy.items() if sub not in stopped]
+    if not running:
+        return
+    names = ", ".join(f"`{sub}`" for sub, _, _ in running)
+    first_state = running[0][1]
+    where = f" in state `{first_state}`" if r.state.kind == "any" else ""
+    diag = diags.add("W0527", r.label_span, f"rule `{r.label}` fails the plan{where} while {names} may still be executing", "leaves it running")
+    for sub, _, cmd in running:
         diag.with_label(cmd.span, f"`{sub}` commanded here")
-        diag.with_note(f"the supervisor hears ERROR while `{sub}.{cmd.verb}` goes on, unsupervised")
-        diag.with_help(f"stop it in the same rule (e.g. `{sub}.HALT()`), or test `{sub}` in the condition")
+    diag.with_note("the supervisor hears ERROR while the delegated work goes on, unsupervised")
+    diag.with_help(f"stop it in the same rule (e.g. `{running[0][0]}.HALT()`), or test it in the condition")
 
 
 def _never_commanded(plan: m.Plan, diags: Diagnostics) -> None:

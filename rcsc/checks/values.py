@@ -83,31 +83,39 @@ class _Plan:
         self.enc = Encoder(design, c, self.verb, period, nan_params=params_may_be_nan(design, c, plan.verb))
         self.terms: dict[int, object] = {}
         self.reported: set[tuple] = set()
+        self.solver: z3.Solver | None = None  # made on the first question
+
+    def term(self, r: m.Rule):
+        """The encoded condition of `r`, made when a question first needs it."""
+        if r.index not in self.terms:
+            self.terms[r.index] = self.enc.guard(r.guard).term  # type: ignore[arg-type]
+        return self.terms[r.index]
 
     def run(self) -> None:
-        try:
-            for r in self.plan.rules:
-                if r.guard is not None:
-                    self.terms[r.index] = self.enc.guard(r.guard).term
-        except (Unsupported, HasTypeError):
-            return  # the guard analysis reports what it cannot encode (W0518)
         states = [s for s in plan_states(self.plan) if s not in ("done", "error")]
         rules_in = {s: [r for r in self.plan.rules if s in rule_sources(r, states)] for s in states}
         for r in self.plan.rules:
-            contexts = []
-            for s in rule_sources(r, states):
-                if s not in rules_in:
-                    continue
-                before = [x for x in rules_in[s] if x.index < r.index]
-                if r.otherwise:
-                    before = [x for x in rules_in[s] if x.guard is not None]
-                ctx = [z3.Not(self.terms[x.index]) for x in before if x.index in self.terms]
-                contexts.append(ctx)
-            if not contexts:
+            sources = [s for s in rule_sources(r, states) if s in rules_in]
+            if not sources:
                 continue
+
+            # Most rules ask nothing: the contexts (which encode the earlier
+            # rules' conditions) are made only when a question needs them.
+            def contexts(r=r, sources=sources) -> list[list]:
+                out = []
+                for s in sources:
+                    before = [x for x in rules_in[s] if x.index < r.index and x.guard is not None]
+                    if r.otherwise:
+                        before = [x for x in rules_in[s] if x.guard is not None]
+                    out.append([z3.Not(self.term(x)) for x in before])
+                return out
+
+            def fired(r=r, contexts=contexts) -> list[list]:
+                own = [self.term(r)] if r.guard is not None else []
+                return [ctx + own for ctx in contexts()]
+
             if r.guard is not None:
                 self._expr_checks(r.guard, contexts, r)
-            fired = [ctx + ([self.terms[r.index]] if r.index in self.terms else []) for ctx in contexts]
             assigned: set[tuple[str, str]] = set()
             for job in r.jobs:
                 for e in m.stmt_exprs(job):
@@ -122,20 +130,35 @@ class _Plan:
 
     # ---- questions ----
 
-    def _ask(self, contexts: list[list], bad, span=None, question: str = "") -> z3.ModelRef | None:
+    def _ask(self, make_contexts, bad, span=None, question: str = "") -> z3.ModelRef | None:
         """A model of `bad` in one of the contexts; an undecided question is W0518, never a pass."""
+        try:
+            contexts = make_contexts()
+        except (Unsupported, HasTypeError):
+            return None  # a condition the guard analysis cannot encode either (W0518 there)
+        if self.solver is None:
+            self.solver = z3.Solver()
+            self.solver.set("timeout", TIMEOUT_MS)
+            self.solver.set("rlimit", RLIMIT)
+            self.added = 0
+        s = self.solver
+        # Inputs met since the last question (encoding makes them lazily).
+        inputs = list(self.enc.inputs.values())
+        for inp in inputs[self.added:]:
+            s.add(inp.constraint)
+        self.added = len(inputs)
         for ctx in contexts:
-            s = z3.Solver()
-            s.set("timeout", TIMEOUT_MS)
-            s.set("rlimit", RLIMIT)
-            for inp in self.enc.inputs.values():
-                s.add(inp.constraint)
-            s.add(*self.enc.side)
-            s.add(*ctx)
-            s.add(bad)
-            res = s.check()
-            if res == z3.sat:
-                return s.model()
+            s.push()
+            try:
+                s.add(*self.enc.side)
+                s.add(*ctx)
+                s.add(bad)
+                res = s.check()
+                model = s.model() if res == z3.sat else None
+            finally:
+                s.pop()
+            if model is not None:
+                return model
             if res != z3.unsat and span is not None and (span.start, "unknown") not in self.reported:
                 self.reported.add((span.start, "unknown"))
                 d = self.diags.add("W0518", span, f"value analysis of plan `{self.plan.verb}` of `{self.c.name}` is incomplete", "not decided")
@@ -246,9 +269,25 @@ class _Plan:
                     return True
         return False
 
+    def _declared(self, e: m.Expr) -> m.Range | None:
+        """The declared range of a plain reference (a ranged parameter, local, ...)."""
+        if not isinstance(e, m.Ref):
+            return None
+        table = {"gm": self.design.gm, "local": self.c.locals, "status": self.c.status_fields}.get(e.kind)
+        if table is not None:
+            var = table.get(e.name)
+        elif e.kind == "param" and self.verb is not None:
+            var = self.verb.param(e.name)
+        else:
+            var = None
+        return var.range if var is not None else None
+
     def _slot(self, e: m.Expr, rng: m.Range | None, t: Type, what: str, contexts, r: m.Rule, assigned) -> None:
         if rng is None or _reads(e) & assigned or (e.span.start, "range") in self.reported or self._history(e):
             return
+        own = self._declared(e)
+        if own is not None and rng.lo <= own.lo and own.hi <= rng.hi:
+            return  # a value whose own declared range fits needs no question
         if isinstance(e, m.Const):
             v = e.value
             if isinstance(v, (int, float)) and not isinstance(v, bool) and rng.lo <= v <= rng.hi:
