@@ -26,3 +26,21 @@ def test_explain_is_case_insensitive_and_rejects_unknown_codes() -> None:
     assert explain("e0100") == explain("E0100")
     assert explain("E0100").startswith("E0100 (error): unknown name\n\n")
     assert explain("E9999") is None
+
+
+# The checker's findings about the mistakes designers make: each explanation
+# shows the mistake and its fix, so that `rcsc explain` teaches the idiom.
+WITH_EXAMPLES = [
+    "W0008", "W0403", "E0505", "W0515", "W0519", "W0520", "W0521", "W0522", "W0523",
+    "W0524", "W0525", "W0526", "W0527", "W0610", "E0611",
+]
+
+
+@pytest.mark.parametrize("code", WITH_EXAMPLES)
+def test_explanation_has_a_wrong_and_a_fixed_example(code: str) -> None:
+    text = explain(code)
+    assert text is not None
+    wrong, fixed = text.find("\nWrong"), text.find("\nFixed")
+    assert 0 < wrong < fixed, text
+    # Each example is an indented block after its heading.
+    assert "\n    " in text[wrong:fixed] and "\n    " in text[fixed:], text
