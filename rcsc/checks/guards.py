@@ -178,35 +178,46 @@ def check(design: Design, diags: Diagnostics, options: Options | None = None, st
         return
     t0 = time.perf_counter()
     cache: dict = {}
+    nan = nan_params(design)
     for c in design.controllers.values():
         assigned = _assigned_in_pre_post(c)
         for plan in c.plans.values():
             st.plans += 1
-            _analyse_plan(design, c, plan, assigned, opts, st, diags, cache)
+            _analyse_plan(design, c, plan, assigned, opts, st, diags, cache, (c.name, plan.verb) in nan)
     st.seconds += time.perf_counter() - t0
 
 
-def params_may_be_nan(design: Design, c: m.Controller, verb: str) -> bool:
-    """Whether an f64 parameter of `c`'s verb can be NaN.
+def nan_params(design: Design) -> set[tuple[str, str]]:
+    """The (controller, verb) pairs whose f64 parameters can be NaN.
 
     Operator commands (scenarios, the top controller's command input) carry
     numbers, never NaN (a scenario's NaN argument is refused, E0206), so the
-    parameters of a verb can be NaN only when a supervisor in the design
-    sends that verb: its argument may be computed from a NaN reading.
+    parameters of a verb can be NaN only when its supervisor sends that verb
+    with an argument that can carry a NaN (see `_may_be_nan`).  Computed once
+    per design, to a fixed point (a parameter passed on down the hierarchy).
     """
-    sup = design.controllers.get(c.supervisor) if c.supervisor else None
-    if sup is None:
-        return False
-    for plan in sup.plans.values():
-        for r in plan.rules:
-            for job in m.walk_stmts(r.jobs):
-                if isinstance(job, m.Command) and job.sub == c.name and job.verb == verb:
-                    if any(_may_be_nan(design, sup, plan, a) for a in job.args):
-                        return True
-    return False
+    sends = []
+    for sup in design.controllers.values():
+        for plan in sup.plans.values():
+            for r in plan.rules:
+                for job in m.walk_stmts(r.jobs):
+                    if isinstance(job, m.Command):
+                        sub = design.controllers.get(job.sub)
+                        if sub is not None and sub.supervisor == sup.name:
+                            sends.append((sup.name, plan.verb, job))
+    out: set[tuple[str, str]] = set()
+    changed = True
+    while changed:
+        changed = False
+        for sup, verb, job in sends:
+            key = (job.sub, job.verb)
+            if key not in out and any(_may_be_nan(a, (sup, verb) in out) for a in job.args):
+                out.add(key)
+                changed = True
+    return out
 
 
-def _may_be_nan(design: Design, c: m.Controller, plan: m.Plan, e: m.Expr) -> bool:
+def _may_be_nan(e: m.Expr, params_nan: bool) -> bool:
     """Whether a supervisor's argument can carry a NaN into a command.
 
     A NaN enters from outside or from arithmetic that makes one: a Global
@@ -217,15 +228,13 @@ def _may_be_nan(design: Design, c: m.Controller, plan: m.Plan, e: m.Expr) -> boo
     reported where it enters.
     """
     for x in m.walk_expr(e):
-        if not isinstance(x.type, FloatType) and not isinstance(x.type, RecordType):
+        if not isinstance(x.type, (FloatType, RecordType)):
             continue
-        if isinstance(x, m.Ref) and x.kind == "gm":
+        if isinstance(x, m.Ref) and (x.kind == "gm" or (x.kind == "param" and params_nan)):
             return True
         if isinstance(x, m.Call) and x.kind == "extern":
             return True
         if isinstance(x, m.Binary) and x.op == "/":
-            return True
-        if isinstance(x, m.Ref) and x.kind == "param" and params_may_be_nan(design, c, plan.verb):
             return True
     return False
 
@@ -389,13 +398,13 @@ class _Unsat:
 
 
 class _Analysis:
-    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, opts: Options, st: Stats) -> None:
+    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, opts: Options, st: Stats, nan: bool = True) -> None:
         self.design, self.c, self.plan, self.opts, self.st = design, c, plan, opts, st
         self.assigned = assigned
         verb = c.verbs.get(plan.verb)
         cpu = design.cpus.get(c.cpu) if c.cpu else None
         self.period = cpu.heartbeat_ns if cpu is not None else None
-        self.enc = Encoder(design, c, verb, self.period, nan_params=params_may_be_nan(design, c, plan.verb))
+        self.enc = Encoder(design, c, verb, self.period, nan_params=nan)
         self.guarded = [r for r in plan.rules if r.guard is not None]
         self.encs: dict[int, Encoding] = {}
         for r in self.guarded:
@@ -865,10 +874,10 @@ def _uninterpreted_apps(terms) -> list:
 class _Canon:
     """A canonical text of a plan's analysis problem, with its inputs numbered in order of use."""
 
-    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, period) -> None:
+    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, period, nan: bool = True) -> None:
         self.design, self.c = design, c
         self.keys: dict[tuple, int] = {}
-        self.parts: list = [plan.ordered, period, params_may_be_nan(design, c, plan.verb)]
+        self.parts: list = [plan.ordered, period, nan]
         verb = c.verbs.get(plan.verb)
         self.params = {p.name: p for p in verb.params} if verb else {}
         self.assigned = assigned
@@ -955,7 +964,7 @@ class _Canon:
 # ---- reporting -------------------------------------------------------------------------
 
 
-def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts: Options, st: Stats, diags: Diagnostics, cache: dict) -> None:
+def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts: Options, st: Stats, diags: Diagnostics, cache: dict, nan: bool = True) -> None:
     if not any(r.guard is not None for r in plan.rules):
         return
     if plan.verb not in c.verbs:
@@ -965,7 +974,7 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
     period = cpu.heartbeat_ns if cpu is not None else None
     canon = None
     if opts.cache:
-        canon = _Canon(design, c, plan, assigned, period)
+        canon = _Canon(design, c, plan, assigned, period, nan)
         ckey = canon.key()
         hit = cache.get(ckey)
         if hit is not None:
@@ -978,7 +987,7 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
                 _report(design, c, plan, _rename(f, mapping, state_map), diags)
             return
     try:
-        an = _Analysis(design, c, plan, assigned, opts, st)
+        an = _Analysis(design, c, plan, assigned, opts, st, nan)
         findings = an.run(lit_dead)
     except HasTypeError:
         return

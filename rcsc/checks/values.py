@@ -30,7 +30,7 @@ from __future__ import annotations
 import z3
 
 from rcsc import model as m
-from rcsc.checks.guards import front_end_errors, params_may_be_nan
+from rcsc.checks.guards import front_end_errors, nan_params
 from rcsc.checks.plans import plan_states, rule_sources
 from rcsc.diagnostics import Diagnostics
 from rcsc.model import Design
@@ -45,12 +45,13 @@ I64 = IntType("i64", 64, True)
 def check(design: Design, diags: Diagnostics) -> None:
     if front_end_errors(diags):
         return
+    nan = nan_params(design)
     for c in design.controllers.values():
         cpu = design.cpus.get(c.cpu) if c.cpu else None
         period = cpu.heartbeat_ns if cpu is not None else None
         for plan in c.plans.values():
             if plan.verb in c.verbs:
-                _Plan(design, c, plan, period, diags).run()
+                _Plan(design, c, plan, period, diags, (c.name, plan.verb) in nan).run()
 
 
 def _assigned_names(s: m.Stmt) -> set[tuple[str, str]]:
@@ -77,10 +78,10 @@ def _needs_solver(e: m.Expr) -> bool:
 
 
 class _Plan:
-    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, period, diags: Diagnostics) -> None:
+    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, period, diags: Diagnostics, nan: bool) -> None:
         self.design, self.c, self.plan, self.diags = design, c, plan, diags
         self.verb = c.verbs.get(plan.verb)
-        self.enc = Encoder(design, c, self.verb, period, nan_params=params_may_be_nan(design, c, plan.verb))
+        self.enc = Encoder(design, c, self.verb, period, nan_params=nan)
         self.terms: dict[int, object] = {}
         self.reported: set[tuple] = set()
         self.solver: z3.Solver | None = None  # made on the first question
