@@ -108,7 +108,7 @@ def _cpus(tree: _Tree) -> tuple[list[str], dict[int, int]]:
     return out, hb_of
 
 
-def _plan(i: int, verb: str, subs: list[int], r: int, hb: int, continuous: bool, reports: bool) -> str:
+def _plan(i: int, verb: str, subs: list[int], r: int, hb: int, continuous: bool, reports: bool, halt: bool = False) -> str:
     """One plan of exactly `r` rules (`reports`: this controller declares AT_GOAL)."""
     me = f"c{i}"
     kind = _verb_kind(verb)
@@ -138,6 +138,11 @@ def _plan(i: int, verb: str, subs: list[int], r: int, hb: int, continuous: bool,
     if subs:
         setup.append(f"{me}_sp = target")
     cmds = [f"{n}.{verb}({_command_args(verb, k)})" for k, n in enumerate(sub_names)]
+    if r <= 2:
+        # Too few rules to wait for the subordinates: a plan that commanded
+        # them and finished at once would report done while they still work
+        # (W0521), so these plans do their own part only.
+        cmds = []
 
     if r == 1:
         return f"    plan {verb} {{\n        E0: true | new -> done | {', '.join(setup + cmds)};\n    }}\n"
@@ -198,9 +203,20 @@ def _plan(i: int, verb: str, subs: list[int], r: int, hb: int, continuous: bool,
                         guard = f"C{subs[0]}.AT_GOAL" if subs else f"approx_eq({me}_raw, target, 0.1) and in_state < {dur(s)}"
                         stays.append((guard, state, "*", "report AT_GOAL"))
                 elif variant == 2:
-                    faults.append((f"count >= 100 or {me}_raw > 1000.0", state, "error(3)", "phase = Phase.FAULT"))
+                    stop = "phase = Phase.FAULT" + ("".join(f", {n}.HALT()" for n in sub_names) if halt else "")
+                    wait = f" and not C{subs[0]}.done" if subs and not halt else ""
+                    faults.append((f"(count >= 100 or {me}_raw > 1000.0){wait}", state, "error(3)", stop))
                 else:
-                    faults.append((f"in_state >= {dur(20 + 5 * s + e_no)}", state, "error(2)", "phase = Phase.FAULT"))
+                    # A time-out must not leave the subordinates running
+                    # (W0527): it halts them, or (without a HALT verb) gives
+                    # up only while the first one still works.
+                    if subs and halt:
+                        stop = "phase = Phase.FAULT, " + ", ".join(f"{n}.HALT()" for n in sub_names)
+                        faults.append((f"in_state >= {dur(20 + 5 * s + e_no)}", state, "error(2)", stop))
+                    elif subs:
+                        faults.append((f"in_state >= {dur(20 + 5 * s + e_no)} and not C{subs[0]}.done", state, "error(2)", "phase = Phase.FAULT"))
+                    else:
+                        faults.append((f"in_state >= {dur(20 + 5 * s + e_no)}", state, "error(2)", "phase = Phase.FAULT"))
             rules.extend(faults + [progress] + stays)
 
     assert len(rules) == r, (len(rules), r)
@@ -279,7 +295,7 @@ def generate(n: int = 200, p: int = 20, r: int = 10) -> str:
         out.append(f"    post {{ {' '.join(post)} }}\n")
         for k, v in enumerate(verbs):
             continuous = k == len(verbs) - 1 and p >= 5
-            out.append(_plan(i, v, subs, r, hb, continuous, reports))
+            out.append(_plan(i, v, subs, r, hb, continuous, reports, halt=p >= 3))
         out.append("}\n\n")
     out.extend(cpus)
     return "".join(out)

@@ -189,6 +189,7 @@ class GmVar(Node):
     type: TypeRef
     init: Expr | None
     from_env: bool
+    to_env: bool = False  # `to env`: an output the environment reads (an actuator)
 
 
 @dataclass(slots=True)

@@ -85,6 +85,22 @@ wrong type, or a diagnostic code that does not exist. The keys are `select`,
 Only warnings can be ignored or have their severity changed: an error means
 the design is wrong whatever a report shows.
 """),
+    ("W0008", _W, "malformed or unused suppression", """
+A comment `// rcsc: allow(CODE) reason` suppresses the CODE findings that start
+on its line (or, when it stands alone on its line, on the next line). It must
+name known warning codes (an error cannot be allowed), give a reason, and
+cover a finding; otherwise it is reported, so that stale or careless
+suppressions do not pile up. Suppressed findings stay in the SARIF report,
+marked as suppressed in the source with their reason.
+
+Wrong:
+
+    F3: level >= 2.0 | S1 -> done;   // rcsc: allow(W0515)
+
+Fixed:
+
+    F3: level >= 2.0 | S1 -> done;   // rcsc: allow(W0515) the arrival wins over the time-out on purpose
+"""),
     # ---- names --------------------------------------------------------------
     ("E0100", _E, "unknown name", """
 A name is used that is not declared where it is used. Inside a controller the
@@ -239,6 +255,16 @@ value readers see before the first write.
     ("W0403", _W, "Global Memory variable is never read", """
 A variable that nobody reads is dead data in every cycle's buffer exchange.
 Remove it, or add it to the `reads` of the controller that is meant to use it.
+An actuator output that goes to the plant through the I/O hooks is read by the
+environment: declare it `to env` (the mirror of `from env`).
+
+Wrong:
+
+    gm valve_cmd: f64 = 0.0        // written by FILL, sent to the valve
+
+Fixed:
+
+    gm valve_cmd: f64 = 0.0 to env
 """),
     # ---- plans --------------------------------------------------------------
     ("E0500", _E, "verb has no plan", """
@@ -264,9 +290,30 @@ not queued, and the second would silently supersede the first.
 """),
     ("E0505", _E, "state waits on a subordinate but ignores its error", """
 A state has a rule that waits for `SUB.done` (or another status of SUB), but no
-rule that applies in this state tests `SUB.error`. If the subordinate fails, the
-plan waits forever - the defect of rcslib's generated INIT/HALT plans. Add a
-rule such as `E9: SUB.error | * -> error(1);`.
+rule that applies in this state tests `SUB.error`, and SUB can fail for a verb
+this controller sends it. If it fails, the plan waits forever. Reported once
+per plan and subordinate, at the first wait.
+
+SUB counts as able to fail for a verb when its plan for that verb has an
+`error(...)` rule (or reports ERROR), when SUB is a `simulator` (a plant model
+that a deployment replaces by the real plant), or when the design has no plan
+for the verb. A subordinate whose plans always end in `done` (the INIT and HALT
+plans that NIST's RCS-Design tool generates) needs no error rule.
+
+Wrong:
+
+    plan RUN {
+        E0: true     | new -> S1 | LOW.GO();
+        E1: LOW.done | S1  -> done;      // LOW.GO can end in error(4)
+    }
+
+Fixed (the `*` error rule right after the `new` rules):
+
+    plan RUN {
+        E0: true      | new -> S1 | LOW.GO();
+        E9: LOW.error | *   -> error(4);
+        E1: LOW.done  | S1  -> done;
+    }
 """),
     ("E0506", _E, "rule can never fire", """
 Earlier rules of the same state always match first (first match wins), so this
@@ -303,6 +350,167 @@ A controller has two plans with the same name. Each verb has exactly one plan
 (its state table), so a second plan for the same verb is either a leftover copy
 or a misspelt verb name.
 """),
+    ("W0519", _W, "command storm: a rule re-commands a subordinate every cycle", """
+A rule that stays in its state (`-> *` or `S1 -> S1`) and commands a
+subordinate, without testing that subordinate's status in its condition, fires
+again in the next cycle and sends the command again. Commands are not queued:
+each one supersedes the last, so the subordinate restarts its plan every cycle
+and never finishes.
+
+Wrong:
+
+    E1: level < 1.0 | FILLING -> * | VALVE.OPEN();
+
+Fixed (command once on the way in, then wait):
+
+    E0: true             | new     -> FILLING | VALVE.OPEN();
+    E1: VALVE.error      | *       -> error(2);
+    E2: level >= 1.0     | FILLING -> done;
+"""),
+    ("W0520", _W, "`*` rule that tests a subordinate comes before the `new` rules", """
+When a new command arrives, a subordinate's status still answers the previous
+command (DONE and ERROR stay until it is commanded again). A `*` rule that
+tests a subordinate, written before the rules for `new`, can fire in `new` on
+that stale status instead of the entry rule. Put `*` fault rules right after
+the `new` rules.
+
+Wrong:
+
+    E9: LOW.error | *   -> error(1);
+    E0: true      | new -> S1 | LOW.GO();
+
+Fixed:
+
+    E0: true      | new -> S1 | LOW.GO();
+    E9: LOW.error | *   -> error(1);
+"""),
+    ("W0521", _W, "plan reports done while a subordinate may still be executing", """
+A rule ends the plan with `done` in a state that was entered by commanding a
+subordinate (or commands it itself), and its condition does not test that
+subordinate. The supervisor then hears DONE while the delegated work is still
+under way.
+
+Wrong:
+
+    E0: true          | new -> MOVING | AXIS.MOVE(x = 10.0);
+    E1: in_state >= 2 s | MOVING -> done;
+
+Fixed:
+
+    E0: true          | new -> MOVING | AXIS.MOVE(x = 10.0);
+    E9: AXIS.error    | *   -> error(3);
+    E1: AXIS.done     | MOVING -> done;
+"""),
+    ("W0522", _W, "plan waits on a subordinate it never commands", """
+A condition tests `SUB.done` (or `SUB.executing`, or an extra status of SUB),
+but no rule of the plan commands SUB. SUB's status answers an earlier command,
+from another plan or another run of this one, or none at all: the wait ends at
+once on a stale DONE, or never.
+
+Wrong:
+
+    plan UNLOAD {
+        U0: true     | new -> S1;
+        U1: ARM.done | S1  -> done;
+    }
+
+Fixed:
+
+    plan UNLOAD {
+        U0: true      | new -> S1 | ARM.PLACE();
+        U9: ARM.error | *   -> error(2);
+        U1: ARM.done  | S1  -> done;
+    }
+"""),
+    ("W0523", _W, "exact `==` on f64 in a condition", """
+A measured or computed `f64` is almost never exactly equal to a value: a level
+that passes 2.0 between two cycles is never `== 2.0`, and the rule never fires.
+Compare with a tolerance or an inequality. When exact equality is meant (a
+value copied unchanged, a flag stored as 0.0 or 1.0), say so on the line with
+`// rcsc: allow(W0523) reason`.
+
+Wrong:
+
+    E1: level == 2.0 | FILLING -> done;
+
+Fixed:
+
+    E1: level >= 2.0 | FILLING -> done;
+    E1: abs(level - 2.0) <= 0.01 | FILLING -> done;
+"""),
+    ("W0524", _W, "value can be outside its declared range", """
+A job list puts a value into a ranged slot - an argument for a parameter
+declared `x: i32 in 0..10`, an assignment to a ranged local, status field or
+Global Memory variable - and for the inputs shown as witness (with the rule's
+condition true and the earlier rules of its state false) the value is outside
+the range. The checks of the receiving plan assume the range (a command with
+x = 20 can leave every rule of `new` false, and the plan sits there for ever),
+so the range must be kept where values enter it.
+
+Wrong:
+
+    verb GO(x: i32 in 0..10)               // of LOW
+    E0: true | new -> S1 | LOW.GO(x = n + 1);
+
+Fixed:
+
+    E0: n < 10 | new -> S1 | LOW.GO(x = n + 1);
+    E1: otherwise | new -> error(2);
+"""),
+    ("W0525", _W, "integer overflow or division by zero", """
+For the inputs shown as witness, integer arithmetic in a condition or a job
+list wraps around its type (`+`, `-`, `*` on i32, i64, u32 or durations), or
+`/` or `%` divides by zero, which gives 0 by the language's rules. Either is
+rarely what the designer meant. Bound the operands with a range or a test in
+the condition, or use a wider type.
+
+Wrong:
+
+    E1: true | S1 -> done | rate = total / count;
+
+Fixed:
+
+    E1: count > 0 | S1 -> done | rate = total / count;
+    E2: otherwise | S1 -> error(4);
+"""),
+    ("W0527", _W, "error exit leaves a commanded subordinate running", """
+A rule ends the plan with `error(...)` in a state that was entered by
+commanding a subordinate, its condition tests no subordinate (a time-out, a
+sensor fault), and it does not command the subordinate again (to stop it). The
+supervisor hears ERROR while the subordinate goes on with work nobody
+supervises any more: a time-out that leaves an axis moving. (A rule that
+reacts to one subordinate's failure while another finishes its part is not
+reported.)
+
+Wrong:
+
+    E0: true            | new    -> MOVING | AXIS.MOVE(x = 10.0);
+    E8: in_state >= 5 s | MOVING -> error(2);
+
+Fixed:
+
+    E8: in_state >= 5 s | MOVING -> error(2) | AXIS.HALT();
+"""),
+    ("W0526", _W, "loop of states can only be left through an error", """
+The plan can end in `done`, but from a loop of states every way out leads to
+`error(...)`: once in the loop, the command can only fail. Usually the rule
+that leaves the loop on success is missing or its next state is misspelt (a
+misspelt name makes a new state), or the loop's only exits are `*` fault
+rules. A plan that always fails (an ABORT) and a `continuous` plan are not
+reported.
+
+Wrong:
+
+    E0: true          | new  -> MOVE | AX.GO();
+    E9: AX.error      | *    -> error(1);
+    E1: AX.done       | MOVE -> WAIT | AX.GO();
+    E2: AX.done       | WAIT -> MOVE | AX.GO();
+
+Fixed:
+
+    E2: AX.done and n >= 3 | WAIT -> done;
+    E3: AX.done and n < 3  | WAIT -> MOVE | AX.GO(), n += 1;
+"""),
     # ---- guards (z3): determinism and coverage of state tables ------------------
     ("E0513", _E, "condition is never true", """
 The guard analysis proved that no input makes this rule's condition true, given
@@ -319,11 +527,28 @@ catch everything, write `true`; otherwise the condition is not what was meant.
     ("W0515", _W, "rules of a state can both be true with different outcomes", """
 Two rules of one state can both be true for the same input (and no earlier rule
 is), and they lead to different next states or jobs: the order of the table
-silently decides which one fires. The witness is such an input. Make the
-conditions exclusive, or declare the plan `ordered` (`plan X ordered { ... }`)
-to state that the table is prioritized on purpose. Not reported when the earlier
-rule leads to `error(...)`: a fault or time-out rule written first is the
-paper's prioritized style.
+silently decides which one fires. The witness is such an input, and the notes
+say how the two rules differ.
+
+Most overlaps are bugs - an off-by-one (`>= 50` and `<= 60`), a missing
+`and not ...`, a command storm - and the fix is to make the conditions
+exclusive. When the earlier rule must win on purpose, say so for that pair with
+`// rcsc: allow(W0515) reason` on the later rule's line. `plan X ordered`
+declares the whole table prioritized and hides every overlap, real bugs
+included: keep it for tables written as a priority list. Not reported when the
+earlier rule leads to `error(...)` (a fault or time-out rule written first is
+the paper's prioritized style), nor between a `new` rule and a later `*` rule
+in `new` (a gap there is E0516, reported once).
+
+Wrong:
+
+    E1: level >= 50 | S1 -> done;
+    E2: level <= 60 | S1 -> S2;        // 50..60: E1 wins by position
+
+Fixed:
+
+    E1: level > 60  | S1 -> done;
+    E2: level <= 60 | S1 -> S2;
 """),
     ("E0516", _E, "a new command can leave every rule of `new` false", """
 For the input shown as witness no rule of state `new` (nor any `*` rule) fires,
@@ -383,6 +608,37 @@ A controller's `period D` says it steps on every n-th cycle of its CPU, so D
 must be a whole multiple n of the CPU's heartbeat (n >= 1). A controller with
 `period 50 ms` on a 20 ms CPU would have no fixed place in the cycle; choose a
 multiple (40 ms, 60 ms) or move it to a CPU whose heartbeat divides 50 ms.
+"""),
+    ("W0610", _W, "a period constant differs from the heartbeat", """
+A constant named as a time step (DT, TS, PERIOD, CYCLE, SAMPLE_TIME, TICK, or
+ending in _DT or _PERIOD), in seconds (f64) or as a duration, is used by a
+controller whose CPU beats at another period. A plant model or filter that
+integrates with it is off by the ratio in every cycle.
+
+Wrong:
+
+    const DT: f64 = 0.03              // written for a 30 ms heartbeat
+    cpu MAIN { heartbeat 10 ms  schedule TANK }
+
+Fixed:
+
+    const DT: f64 = 0.01
+    cpu MAIN { heartbeat 10 ms  schedule TANK }
+"""),
+    ("E0611", _E, "an extern's budget does not fit in the caller's budget", """
+An `extern fn` declares its worst-case time with `budget`. A controller that
+calls an extern taking longer than its own whole step, or whose `pre` and
+`post` call externs that together take longer, cannot keep its declared
+budget, so the CPU budget check (E0600) would rest on a false number.
+
+Wrong:
+
+    extern fn solve_ik(x: f64) -> f64 budget 2 ms
+    controller ARM level 1 budget 500 us { ... solve_ik(goal) ... }
+
+Fixed:
+
+    controller ARM level 1 budget 3 ms { ... solve_ik(goal) ... }
 """),
     # ---- code generation ----------------------------------------------------
     ("E0800", _E, "the target cannot build this design", """

@@ -68,6 +68,9 @@ class Diagnostics:
     def __init__(self) -> None:
         self.items: list[Diagnostic] = []
         self._seen: set[tuple] = set()
+        # Findings an in-source `rcsc: allow(CODE) reason` comment covers
+        # (rcsc.suppress): out of the report, kept for SARIF.
+        self.suppressed: list[Diagnostic] = []
 
     def add(
         self,

@@ -379,7 +379,10 @@ def _gm_rows(design: m.Design) -> list[GmRow]:
         links = _links(writers, controller_anchor)
         if var.from_env:
             links = [("environment", "")] + links
-        rows.append(GmRow(gm_anchor(var.name), var.name, str(var.type), format_value(var.init, var.type), links, _links(readers, controller_anchor)))
+        reader_links = _links(readers, controller_anchor)
+        if var.to_env:
+            reader_links = reader_links + [("environment", "")]
+        rows.append(GmRow(gm_anchor(var.name), var.name, str(var.type), format_value(var.init, var.type), links, reader_links))
     return rows
 
 

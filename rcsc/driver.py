@@ -10,9 +10,10 @@ from __future__ import annotations
 import gc
 from dataclasses import dataclass
 
-from rcsc import cache
+from rcsc import cache, suppress
 from rcsc.checks import check_model, guards
 from rcsc.diagnostics import Diagnostics
+from rcsc.hints import add_hints
 from rcsc.loader import InputError, LoadedFile, path_to_files
 from rcsc.model import Design
 from rcsc.sema import ast_to_model
@@ -63,10 +64,15 @@ def _check_path(path: str, as_module: bool, overlay: dict[str, str] | None, cach
     if any(f.tree is None for f in files):
         # A file that does not parse leaves holes that would only produce
         # follow-on findings; report the syntax errors alone.
+        add_hints(diags, None)
         return CheckResult(diags, None, files)
     design = ast_to_model(files, diags)
     store = None
     if cache_dir is not None and not cache.disabled_by_environment():
         store = cache.Store(cache_dir, "guards")
     check_model(design, diags, guards.Options(store=store))
+    # Unused suppressions are reported only when the checks all ran (errors
+    # stop the guard analysis, whose findings an `allow` may be waiting for).
+    suppress.apply([f.source for f in files], diags, report_unused=not diags.has_errors())
+    add_hints(diags, design)
     return CheckResult(diags, design, files)

@@ -190,6 +190,7 @@ class Var:
     init: Value | None = None
     range: Range | None = None
     from_env: bool = False  # GM only
+    to_env: bool = False  # GM only: the environment reads it (an actuator output)
 
 
 @dataclass

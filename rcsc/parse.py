@@ -238,12 +238,16 @@ class _ToAst(Transformer_NonRecursive):
 
     @v_args(meta=True)
     def env_writer(self, meta, children):
-        return True
+        return "from"
+
+    @v_args(meta=True)
+    def env_reader(self, meta, children):
+        return "to"
 
     @v_args(meta=True)
     def gm_decl(self, meta, children):
         name, type_, init, env = children
-        return ast.GmVar(self.span(meta), self.ident(name), type_, init, bool(env))
+        return ast.GmVar(self.span(meta), self.ident(name), type_, init, env == "from", env == "to")
 
     @v_args(meta=True)
     def params(self, meta, children):

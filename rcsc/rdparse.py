@@ -257,12 +257,12 @@ class _Parser:
         if self.toks[self.i] == "=":
             self.i += 1
             init = self.expr()
-        from_env = False
-        if self.toks[self.i] == "from":
+        from_env = to_env = False
+        if self.toks[self.i] in ("from", "to"):
+            from_env, to_env = self.toks[self.i] == "from", self.toks[self.i] == "to"
             self.i += 1
             self.expect("env")
-            from_env = True
-        return ast.GmVar(self.span(first), name, type_, init, from_env)
+        return ast.GmVar(self.span(first), name, type_, init, from_env, to_env)
 
     def signature(self) -> tuple[ast.Ident, list[ast.Param], ast.TypeRef]:
         """`NAME "(" [params] ")" "->" type` of a function or an extern."""

@@ -595,6 +595,15 @@ def render_sarif(
         identity = (d.code, d.span.file.path if d.span else "", d.message)
         results.append(_sarif_result(d, rule_index, seen[identity]))
         seen[identity] += 1
+    # Findings that an in-source `rcsc: allow(CODE) reason` covers: listed
+    # with the suppression and its justification, as SARIF viewers expect.
+    for d in _ordered(getattr(diags, "suppressed", [])):
+        identity = (d.code, d.span.file.path if d.span else "", d.message)
+        result = _sarif_result(d, rule_index, seen[identity])
+        seen[identity] += 1
+        reason = d.data.get("suppression", {}).get("reason", "")
+        result["suppressions"] = [{"kind": "inSource", "justification": reason}]
+        results.append(result)
 
     run: dict = {"tool": {"driver": driver}}
     if root_uri:

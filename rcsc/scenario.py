@@ -14,6 +14,7 @@ and `CTRL.FIELD`.  See docs/scenarios.md.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
@@ -370,8 +371,33 @@ def _command(design, checker, diags, span, cycle, cspan, ctrl: ast.Ident, verb: 
         if value is None:
             diags.add("E0204", e.span, "a command argument in a scenario must be a constant", "not constant")
             return None
+        if not _in_range(diags, e.span, p, value.value):
+            return None
         out[p.name] = value.value
     return Command(cycle, c.name, v.name, out, span)
+
+
+def _in_range(diags, span, p: m.Var, value) -> bool:
+    """An operator command carries a number inside its parameter's declared range (E0206).
+
+    The guard analysis assumes both: a ranged parameter inside its range,
+    and an f64 parameter of an operator command never NaN.
+    """
+    if isinstance(value, float) and math.isnan(value):
+        diags.add("E0206", span, f"`{p.name}` would be NaN", "not a number").with_note(
+            "operator commands carry numbers; the checker assumes a command parameter is never NaN unless a supervisor computes it"
+        )
+        return False
+    rng = p.range
+    if rng is not None and isinstance(value, (int, float)) and not isinstance(value, bool) and not (rng.lo <= value <= rng.hi):
+        from rcsc.smt import format_value
+
+        shown = [format_value(v, p.type) for v in (value, rng.lo, rng.hi)]
+        diags.add("E0206", span, f"`{p.name}` = {shown[0]} is outside its declared range {shown[1]}..{shown[2]}", "out of range").with_note(
+            "the plan is checked for values inside the range only"
+        )
+        return False
+    return True
 
 
 def _constant_value(checker: Checker, e: m.Expr) -> m.Const | None:

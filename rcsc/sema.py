@@ -19,7 +19,7 @@ from rcsc.diagnostics import Diagnostics
 from rcsc.loader import LoadedFile
 from rcsc.source import Span
 from rcsc.typecheck import BUILTIN_FUNCS, CONVERSIONS, Checker, Globals, Scope
-from rcsc.types import BUILTIN_TYPES, ERROR, I32, EnumType, ErrorType, RecordType, Type
+from rcsc.types import BUILTIN_TYPES, DURATION, ERROR, I32, EnumType, ErrorType, RecordType, Type
 
 _RESERVED = set(BUILTIN_TYPES) | set(BUILTIN_FUNCS) | CONVERSIONS | {"cmd", "in_state", "seconds"}
 
@@ -115,9 +115,9 @@ class _Sema:
     def range_of(self, ref: ast.TypeRef, t: Type, checker: Checker) -> m.Range | None:
         if ref.lo is None or ref.hi is None:
             return None
-        if not t.is_numeric:
+        if not t.is_numeric and t != DURATION:
             if not isinstance(t, ErrorType):
-                self.d.add("E0206", ref.span, f"a range needs a numeric type, not `{t}`", "not numeric")
+                self.d.add("E0206", ref.span, f"a range needs a numeric type or `duration`, not `{t}`", "not numeric")
             return None
         lo = checker.constant(ref.lo, t, "a range bound")
         hi = checker.constant(ref.hi, t, "a range bound")
@@ -185,7 +185,7 @@ class _Sema:
                         self.d.add("E0101", v.name.span, f"verb `{v.name.name}` is declared more than once in verb set `{name}`", "repeated verb")
             elif isinstance(item, ast.GmVar):
                 t = self.type_ref(item.type)
-                var = m.Var(name, t, item.span, from_env=item.from_env)
+                var = m.Var(name, t, item.span, from_env=item.from_env, to_env=item.to_env)
                 var.range = self.range_of(item.type, t, const_checker)
                 if item.init is None:
                     self.d.add("E0402", item.name.span, f"Global Memory variable `{name}` has no initial value", "no initial value").with_help(

@@ -253,10 +253,13 @@ class Encoder:
     `x` in two conditions is one variable.
     """
 
-    def __init__(self, design: m.Design, controller: m.Controller, verb: m.Verb | None, period_ns: int | None) -> None:
+    def __init__(self, design: m.Design, controller: m.Controller, verb: m.Verb | None, period_ns: int | None, nan_params: bool = True) -> None:
         self.design = design
         self.c = controller
         self.verb = verb
+        # Whether an f64 command parameter can be NaN: only when a
+        # supervisor sends the verb (operator commands cannot carry NaN).
+        self.nan_params = nan_params
         self.period_ns = period_ns if period_ns and period_ns > 0 else None
         self.inputs: dict[tuple, Input] = {}
         self.side: list[z3.BoolRef] = []  # constraints of extern results
@@ -319,6 +322,8 @@ class Encoder:
             cons = []
             if rng is not None and float(rng.lo) <= float(rng.hi):
                 cons = [z3.Not(nan), r >= real_of(float(rng.lo)), r <= real_of(float(rng.hi))]
+            elif key[0] == "param" and not self.nan_params:
+                cons = [z3.Not(nan)]
             return Input(key, name, t, F(r, nan), [r, nan], _and(*cons))
         raise Unsupported(f"input of type {t}")
 

@@ -44,3 +44,21 @@ def test_docs_codes_md_is_generated_from_the_table(request) -> None:
     if request.config.getoption("--update-golden") or os.environ.get("RCSC_UPDATE_GOLDEN") == "1":
         page.write_text(text, encoding="utf-8", newline="\n")
     assert page.exists() and page.read_text(encoding="utf-8") == text, "docs/codes.md is stale: run pytest --update-golden"
+
+
+# The checker's findings about the mistakes designers make: each explanation
+# shows the mistake and its fix, so that `rcsc explain` teaches the idiom.
+WITH_EXAMPLES = [
+    "W0008", "W0403", "E0505", "W0515", "W0519", "W0520", "W0521", "W0522", "W0523",
+    "W0524", "W0525", "W0526", "W0527", "W0610", "E0611",
+]
+
+
+@pytest.mark.parametrize("code", WITH_EXAMPLES)
+def test_explanation_has_a_wrong_and_a_fixed_example(code: str) -> None:
+    text = explain(code)
+    assert text is not None
+    wrong, fixed = text.find("\nWrong"), text.find("\nFixed")
+    assert 0 < wrong < fixed, text
+    # Each example is an indented block after its heading.
+    assert "\n    " in text[wrong:fixed] and "\n    " in text[fixed:], text

@@ -136,6 +136,7 @@ def test_synthetic_designs_parse_the_same() -> None:
 
 # A word is a keyword only where the grammar expects it; elsewhere it is a name.
 CORNERS = [
+    "design d\ngm x: f64 = 0.0 to env\ngm y: f64 = 0.0 from env\ngm to: i32 = 0\n",  # `to env` and `from env`
     "design d\ncontroller C level 1 budget 1 ms period 20 ms {\n}\n",  # the `period` attribute
     "design d\nconst A: i32 = and\n",  # `and` cannot start an expression: a name
     "design d\nconst A: bool = not if\n",  # after `not`, `if` is a name

@@ -81,7 +81,7 @@ controller TOP level 2 budget 1 ms {
 controller LOW level 1 budget 1 ms {
     verb GO
     plan GO {
-        G0: true | new -> done;
+        G0: true | new -> error(3);
     }
 }
 

@@ -340,6 +340,8 @@ def brute_force(plan: m.Plan) -> Counter:
                         continue
                     if not live[(rj.index, s)]:
                         continue
+                    if s == "new" and ri.state.kind == "new" and rj.state.kind == "any":
+                        continue  # the gap a `*` rule fills in `new` is E0516's
                     if any(fires(s, v) == ri.index and v[rj.index] for _, v in combos):
                         reported.add((ri.index, rj.index))
                         out[("W0515", f"{ri.label}+{rj.label}")] += 1
@@ -551,11 +553,11 @@ def test_json_and_sarif_carry_the_witness() -> None:
     result = check_path(str(CASES / "E0516_new_unanswered.rcs"))
     doc = json.loads(render_json(result.diags, "test"))
     data = [d["data"] for d in doc["diagnostics"] if d["code"] == "E0516"]
-    assert {"cmd.x": 0} in [d["witness"] for d in data]
+    assert 0 in [d["witness"].get("cmd.x") for d in data]
     assert {"cmd.speed": "NaN"} in [d["witness"] for d in data]
     sarif = json.loads(render_sarif(result.diags, "test"))
     props = [r["properties"] for r in sarif["runs"][0]["results"] if r["ruleId"] == "E0516"]
-    assert {"cmd.x": 0} in [p["witness"] for p in props]
+    assert 0 in [p["witness"].get("cmd.x") for p in props]
 
 
 def test_witness_note_in_text() -> None:

@@ -8,11 +8,11 @@ the design's crossing buffers, for later stages).
 
 from __future__ import annotations
 
-from rcsc.checks import guards, hierarchy, ownership, plans, timing
+from rcsc.checks import commands, cycle, floats, guards, hierarchy, ownership, plans, timing, values
 from rcsc.diagnostics import Diagnostics
 from rcsc.model import Design
 
-FAMILIES = (hierarchy, ownership, plans, timing, guards)
+FAMILIES = (hierarchy, ownership, plans, commands, floats, timing, cycle, guards, values)
 
 
 def check_model(design: Design, diags: Diagnostics, guard_options: guards.Options | None = None) -> None:

@@ -42,6 +42,9 @@ W0515 (warning) order-dependent rules
       its priority is the point;
     - when the later rule can never fire in that state (e.g. a `*` error rule
       in `new`, hidden by `new` rules that cover every input);
+    - in `new`, between a `new` rule and a `*` rule after it: the `*` rule
+      fires in `new` only where the `new` rules leave a gap, which E0516
+      reports once (not once per `*` rule);
     - once per pair of rules, not once per state.
 E0516 (error) a new command can go unanswered
     Inputs for which no rule of `new` fires and `new` has no `otherwise`: the
@@ -178,12 +181,65 @@ def check(design: Design, diags: Diagnostics, options: Options | None = None, st
         return
     t0 = time.perf_counter()
     cache: dict = {}
+    nan = nan_params(design)
     for c in design.controllers.values():
         assigned = _assigned_in_pre_post(c)
         for plan in c.plans.values():
             st.plans += 1
-            _analyse_plan(design, c, plan, assigned, opts, st, diags, cache)
+            _analyse_plan(design, c, plan, assigned, opts, st, diags, cache, (c.name, plan.verb) in nan)
     st.seconds += time.perf_counter() - t0
+
+
+def nan_params(design: Design) -> set[tuple[str, str]]:
+    """The (controller, verb) pairs whose f64 parameters can be NaN.
+
+    Operator commands (scenarios, the top controller's command input) carry
+    numbers, never NaN (a scenario's NaN argument is refused, E0206), so the
+    parameters of a verb can be NaN only when its supervisor sends that verb
+    with an argument that can carry a NaN (see `_may_be_nan`).  Computed once
+    per design, to a fixed point (a parameter passed on down the hierarchy).
+    """
+    sends = []
+    for sup in design.controllers.values():
+        for plan in sup.plans.values():
+            for r in plan.rules:
+                for job in m.walk_stmts(r.jobs):
+                    if isinstance(job, m.Command):
+                        sub = design.controllers.get(job.sub)
+                        if sub is not None and sub.supervisor == sup.name:
+                            sends.append((sup.name, plan.verb, job))
+    out: set[tuple[str, str]] = set()
+    changed = True
+    while changed:
+        changed = False
+        for sup, verb, job in sends:
+            key = (job.sub, job.verb)
+            if key not in out and any(_may_be_nan(a, (sup, verb) in out) for a in job.args):
+                out.add(key)
+                changed = True
+    return out
+
+
+def _may_be_nan(e: m.Expr, params_nan: bool) -> bool:
+    """Whether a supervisor's argument can carry a NaN into a command.
+
+    A NaN enters from outside or from arithmetic that makes one: a Global
+    Memory value (a sensor, another controller's output), an extern's
+    result, an f64 division, or a parameter that can itself be NaN.  The
+    controller's own locals and status fields are taken as numbers: they
+    hold what its own jobs computed from those sources, and a NaN there is
+    reported where it enters.
+    """
+    for x in m.walk_expr(e):
+        if not isinstance(x.type, (FloatType, RecordType)):
+            continue
+        if isinstance(x, m.Ref) and (x.kind == "gm" or (x.kind == "param" and params_nan)):
+            return True
+        if isinstance(x, m.Call) and x.kind == "extern":
+            return True
+        if isinstance(x, m.Binary) and x.op == "/":
+            return True
+    return False
 
 
 def _new_solver(opts: Options) -> z3.Solver:
@@ -296,6 +352,23 @@ def _next_text(rule: m.Rule) -> str:
     return str(rule.next)
 
 
+def _difference(a: m.Rule, b: m.Rule, state: str) -> str:
+    """What two rules do differently: next state, jobs, or both."""
+    parts = []
+    if _target(a, state) != _target(b, state):
+        parts.append(f"the next state ({_next_text(a)} / {_next_text(b)})")
+    if _skey(a.jobs) != _skey(b.jobs):
+        parts.append(f"their jobs ({_jobs_text(a)} / {_jobs_text(b)})")
+    return " and ".join(parts) or "their outcome"
+
+
+def _jobs_text(rule: m.Rule) -> str:
+    if not rule.jobs:
+        return "none"
+    spans = [j.span for j in rule.jobs]
+    return spans[0].to(spans[-1]).text if spans[0].file is spans[-1].file else "..."
+
+
 # ---- the per-plan analysis -----------------------------------------------------------------
 
 
@@ -330,12 +403,12 @@ class _Unsat:
 
 
 class _Analysis:
-    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, opts: Options, st: Stats) -> None:
+    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, opts: Options, st: Stats, nan: bool = True) -> None:
         self.design, self.c, self.plan, self.opts, self.st = design, c, plan, opts, st
         self.assigned = assigned
         verb = c.verbs.get(plan.verb)
         self.period = c.period_ns or None
-        self.enc = Encoder(design, c, verb, self.period)
+        self.enc = Encoder(design, c, verb, self.period, nan_params=nan)
         self.guarded = [r for r in plan.rules if r.guard is not None]
         self.encs: dict[int, Encoding] = {}
         for r in self.guarded:
@@ -577,10 +650,17 @@ class _Analysis:
             f = _Finding("E0506", [r.index], covering=sorted(covering))
             if example is not None:
                 s, before = example
-                res = self.query({r.index: True}, f"an example for `{r.label}`", r.label_span)
+                # The witness shows one of the rules the note names firing:
+                # the earlier rules the note does not name are kept false
+                # (else the witness could show a third rule firing first).
+                ask = {r.index: True} | {i: False for i in before if i not in covering}
+                res = self.query(ask, f"an example for `{r.label}`", r.label_span)
+                if not isinstance(res, _Sat):
+                    ask = {r.index: True}
+                    res = self.query(ask, f"an example for `{r.label}`", r.label_span)
                 if isinstance(res, _Sat):
                     upto = [x.index for x in self.rules_in[s] if x.index <= r.index]
-                    f.witness, f.externs, model = self.witness(res.model, upto, self.lits({r.index: True}))
+                    f.witness, f.externs, model = self.witness(res.model, upto, self.lits(ask))
                     f.state = s
                     f.fires = next((i for i in before if z3.is_true(model.eval(self.p[i], model_completion=True))), None)
             f.approx = self.approx([r.index] + f.covering)
@@ -641,6 +721,12 @@ class _Analysis:
                             continue
                         if not self._live(rj, s, live):
                             continue
+                        if s == "new" and ri.state.kind == "new" and rj.state.kind == "any":
+                            # A `*` rule after the `new` rules (the fault-rule
+                            # idiom) fires in `new` only where the `new` rules
+                            # leave a gap: that gap is E0516 (once), not an
+                            # overlap per `*` rule.
+                            continue
                         before = [x.index for x in self.rules_in[s] if x.index < ri.index]
                         lits = {i: False for i in before}
                         lits[ri.index] = True
@@ -662,6 +748,23 @@ class _Analysis:
         res = self.query(lits, f"whether `{r.label}` can fire in state `{s}`", r.label_span)
         live[(r.index, s)] = isinstance(res, _Sat)
         return live[(r.index, s)]
+
+    def _duration_cap(self, key: tuple) -> list:
+        """A fixed duration without a declared range is at most the longest time in state.
+
+        `in_state` counts whole heartbeats in 64-bit nanoseconds, so it stops
+        short of 2^63 ns (292 years).  A wait `in_state >= cmd.t` ends for every
+        duration it can count; a longer one is not a design's wait but the
+        limit of the counter, so it is not a witness of waiting for ever.
+        """
+        inp = self.enc.inputs[key]
+        if inp.type != DURATION or len(key) != 2:
+            return []
+        var = _var_of(self.design, self.c, self.plan, key[0], key[1])
+        if var is None or var.range is not None:
+            return []
+        period = self.period or 1
+        return [inp.term <= (2**63 - 1) // period * period]
 
     def forever(self, s: str, rules: list[m.Rule]) -> _Finding | None:
         """Exists fixed inputs such that for all other inputs no rule of `s` fires."""
@@ -690,6 +793,7 @@ class _Analysis:
         try:
             for k in fixed:
                 solver.add(self.enc.inputs[k].constraint)
+                solver.add(*self._duration_cap(k))
             solver.add(formula)
             self.st.queries += 1
             self.st.forall_queries += 1
@@ -774,10 +878,10 @@ def _uninterpreted_apps(terms) -> list:
 class _Canon:
     """A canonical text of a plan's analysis problem, with its inputs numbered in order of use."""
 
-    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, period) -> None:
+    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, period, nan: bool = True) -> None:
         self.design, self.c = design, c
         self.keys: dict[tuple, int] = {}
-        self.parts: list = [plan.ordered, period]
+        self.parts: list = [plan.ordered, period, nan]
         verb = c.verbs.get(plan.verb)
         self.params = {p.name: p for p in verb.params} if verb else {}
         self.assigned = assigned
@@ -866,7 +970,7 @@ class _Canon:
 # ---- reporting -------------------------------------------------------------------------
 
 
-def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts: Options, st: Stats, diags: Diagnostics, cache: dict) -> None:
+def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts: Options, st: Stats, diags: Diagnostics, cache: dict, nan: bool = True) -> None:
     if not any(r.guard is not None for r in plan.rules):
         return
     if plan.verb not in c.verbs:
@@ -879,7 +983,7 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
         # Ages count base ticks: a design whose base tick differs from this
         # controller's period analyses the same plan differently.
         unit = period if design.base_tick_ns in (0, period) else (period, design.base_tick_ns)
-        canon = _Canon(design, c, plan, assigned, unit)
+        canon = _Canon(design, c, plan, assigned, unit, nan)
         ckey = canon.key()
         hit = cache.get(ckey)
         if hit is not None:
@@ -901,7 +1005,7 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
                     _report(design, c, plan, f, diags)
                 return
     try:
-        an = _Analysis(design, c, plan, assigned, opts, st)
+        an = _Analysis(design, c, plan, assigned, opts, st, nan)
         findings = an.run(lit_dead)
     except HasTypeError:
         return
@@ -1079,7 +1183,12 @@ def _report(design: Design, c: m.Controller, plan: m.Plan, f: _Finding, diags: D
         d = diags.add("W0515", main.label_span, f"rules `{first.label}` and `{main.label}` can both be true in state `{f.state}`", "also true")
         d.with_label(first.label_span, f"`{first.label}` fires first")
         d.with_note(f"`{first.label}` (-> {_next_text(first)}) fires and `{main.label}` (-> {_next_text(main)}) does not: the order of the table decides")
-        d.with_help(f"make the conditions exclusive, or declare `plan {plan.verb} ordered` if the order is intended")
+        d.with_note(f"they differ in {_difference(first, main, f.state or '')}")
+        d.with_help(f"if neither should win for this input (an off-by-one, a missing `and not ...`), make the conditions exclusive")
+        d.with_help(
+            f"if `{first.label}` must win (a priority), say so here with `// rcsc: allow(W0515) why` on `{main.label}`'s line; "
+            f"`plan {plan.verb} ordered` declares every overlap of the table intended and hides real ones too"
+        )
     else:  # pragma: no cover
         raise KeyError(f.code)
     if f.witness:

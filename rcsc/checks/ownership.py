@@ -2,7 +2,8 @@
 
 Every GM variable has exactly one writer (a controller's `writes`, or `from
 env`), an initial value (checked in sema, where the declaration is read), and
-is read by someone; nothing is read that nobody writes.
+is read by someone (a controller's `reads`, or `to env` for an output the
+plant reads); nothing is read that nobody writes.
 """
 
 from __future__ import annotations
@@ -57,8 +58,8 @@ def check(design: Design, diags: Diagnostics) -> None:
                 diag.with_help(f"add `writes {name}` to the controller that produces it, or declare it `from env`")
             else:
                 diags.add("W0403", _name_span(var), f"Global Memory variable `{name}` is never read or written", "unused")
-        elif not readers[name]:
+        elif not readers[name] and not var.to_env:
             diags.add("W0403", _name_span(var), f"Global Memory variable `{name}` is never read", "never read").with_help(
-                f"add `reads {name}` to the controller that uses it, or remove it"
+                f"add `reads {name}` to the controller that uses it, declare it `to env` if it goes to the plant, or remove it"
             )
 

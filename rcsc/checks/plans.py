@@ -4,7 +4,8 @@ Per plan: an entry rule for `new`; every state reachable from `new`; from
 every reachable state `done` or `error` reachable unless the plan is
 `continuous`; no rule after an unconditional rule of the same state; at most
 one `otherwise` per state; at most one command per subordinate in a job list;
-a state that waits on a subordinate must also handle that subordinate's error.
+a state that waits on a subordinate must also handle that subordinate's error
+when the subordinate can fail for a verb this controller sends it.
 The state graph is built with networkx; node "new" is the entry and the
 nodes "<done>" and "<error>" are the terminals.
 """
@@ -15,6 +16,7 @@ import networkx as nx
 
 from rcsc import model as m
 from rcsc.diagnostics import Diagnostics
+from rcsc.hints import closest
 from rcsc.model import Design
 
 MAX_RULES = 10
@@ -69,7 +71,7 @@ def is_always_true(e: m.Expr | None) -> bool:
 def check(design: Design, diags: Diagnostics) -> None:
     for c in design.controllers.values():
         for plan in c.plans.values():
-            _check_plan(c, plan, diags)
+            _check_plan(design, c, plan, diags)
 
 
 def _region_ends(g: nx.MultiDiGraph, region: list[str], sources: bool) -> list[str]:
@@ -98,7 +100,7 @@ def _first_mention(plan: m.Plan, state: str) -> m.StateRef | None:
     return None
 
 
-def _check_plan(c: m.Controller, plan: m.Plan, diags: Diagnostics) -> None:
+def _check_plan(design: Design, c: m.Controller, plan: m.Plan, diags: Diagnostics) -> None:
     rules = plan.rules
     if len(rules) > MAX_RULES:
         diags.add("W0311", plan.name_span, f"plan `{plan.verb}` of `{c.name}` has {len(rules)} rules", f"more than {MAX_RULES} rules").with_help(
@@ -123,6 +125,13 @@ def _check_plan(c: m.Controller, plan: m.Plan, diags: Diagnostics) -> None:
         if ref is not None:
             diag = diags.add("E0502", ref.span, f"state `{s}` of plan `{plan.verb}` is unreachable from `new`", "unreachable state")
             diag.with_note("no rule leads here from the entry state")
+            own = {r.state.name for r in plan.rules if r.state.kind == "named"}
+            orphan = closest(s, [x for x in plan.states if x in reachable and x not in own])
+            typo = closest(s, [x for x in plan.states if x in reachable] + ["done"])
+            if orphan is not None:
+                diag.with_help(f"a rule leads to `{orphan}`, which has no rules of its own: did you mean `{s}` there? A misspelt next state makes a new state")
+            elif typo is not None:
+                diag.with_help(f"did you mean `{typo}`? A misspelt state name makes a new state")
             after = sorted(nx.descendants(g, s) & set(unreachable))
             if after:
                 diag.with_note("so are the states it leads to: " + ", ".join(f"`{x}`" for x in after))
@@ -137,11 +146,32 @@ def _check_plan(c: m.Controller, plan: m.Plan, diags: Diagnostics) -> None:
             if before:
                 diag.with_note("states that lead here cannot finish either: " + ", ".join(f"`{x}`" for x in before))
             diag.with_help(f"add a rule that leads to `done` or `error(...)`, or declare `plan {plan.verb} continuous`")
+        _check_fail_only(plan, g, reachable, ends, diags)
 
     _check_shadowing(plan, states, diags)
     _check_otherwise(plan, diags)
     _check_commands(plan, diags)
-    _check_error_handling(c, plan, states, diags)
+    _check_error_handling(design, c, plan, states, diags)
+
+
+def _check_fail_only(plan: m.Plan, g: nx.MultiDiGraph, reachable: set[str], ends: set[str], diags: Diagnostics) -> None:
+    """W0526: a loop of states whose only ways out fail, in a plan that can succeed."""
+    succeed = nx.ancestors(g, DONE)
+    fail_only = [s for s in plan_states(plan) if s in reachable and s in ends and s not in succeed]
+    if not fail_only or "new" in fail_only:
+        # A plan that always fails (an ABORT) is a design choice, not a loop.
+        return
+    sub = nx.DiGraph(g.subgraph(fail_only))
+    for comp in nx.strongly_connected_components(sub):
+        if len(comp) < 2:
+            continue
+        first = min(comp, key=fail_only.index)
+        ref = _first_mention(plan, first)
+        span = ref.span if ref is not None else plan.name_span
+        names = ", ".join(f"`{x}`" for x in sorted(comp, key=fail_only.index))
+        diag = diags.add("W0526", span, f"the loop {names} of plan `{plan.verb}` can only be left through `error(...)`", "only fails")
+        diag.with_note("no rule of the loop leads towards `done`: once entered, the command can only fail")
+        diag.with_help("add the rule that leaves the loop on success, or correct a misspelt next state")
 
 
 def literal_dead_rules(plan: m.Plan, states: list[str] | None = None) -> dict[int, m.Rule]:
@@ -208,19 +238,79 @@ def _subs_in(e: m.Expr | None, attrs: tuple[str, ...]) -> list[m.SubView]:
     return [x for x in m.walk_expr(e) if isinstance(x, m.SubView) and x.attr in attrs]
 
 
-def _check_error_handling(c: m.Controller, plan: m.Plan, states: list[str], diags: Diagnostics) -> None:
+def _error_codes(plan: m.Plan) -> list[int]:
+    """The codes of the plan's `-> error(code)` rules, in table order, each once."""
+    return list(dict.fromkeys(r.next.code for r in plan.rules if r.next.kind == "error"))
+
+
+def verbs_sent(c: m.Controller, sub: str) -> dict[str, m.Command]:
+    """The verbs that `c`'s plans send to `sub`, each with its first command."""
+    out: dict[str, m.Command] = {}
+    for plan in c.plans.values():
+        for r in plan.rules:
+            for job in m.walk_stmts(r.jobs):
+                if isinstance(job, m.Command) and job.sub == sub:
+                    out.setdefault(job.verb, job)
+    return out
+
+
+def failure_of(design: Design, sub: str, verb: str) -> str | None:
+    """Why `sub` can end `verb` in ERROR (a short phrase), or None if it cannot.
+
+    A subordinate can fail when its plan for the verb has an `error(...)`
+    rule or reports ERROR, when it is a `simulator` (a plant model that a
+    deployment build can replace by the real plant), and when the design has
+    no plan for the verb (its behaviour is not known here).
+    """
+    c = design.controllers.get(sub)
+    if c is None:
+        return "it is not declared in this design"
+    if c.simulator:
+        return f"`{sub}` is a simulator, which a deployment replaces by the plant"
+    plan = c.plans.get(verb)
+    if plan is None:
+        return f"`{sub}` has no plan for `{verb}`"
+    for r in plan.rules:
+        if r.next.kind == "error":
+            return f"rule `{r.label}` of `{sub}.{verb}` ends in `error({r.next.code})`"
+        for job in m.walk_stmts(r.jobs):
+            if isinstance(job, m.Report) and job.status == "ERROR":
+                return f"rule `{r.label}` of `{sub}.{verb}` reports ERROR"
+    return None
+
+
+def _check_error_handling(design: Design, c: m.Controller, plan: m.Plan, states: list[str], diags: Diagnostics) -> None:
+    """E0505, once per plan and subordinate that can fail, at its first wait."""
     handled: dict[str, set[str]] = {s: set() for s in states}
     for r in plan.rules:
         for view in _subs_in(r.guard, ("error", "error_code")):
             for s in rule_sources(r, states):
                 handled[s].add(view.sub)
-    reported: set[tuple[int, str]] = set()
+    waits: dict[str, list[tuple[m.SubView, list[str]]]] = {}
     for r in plan.rules:
         for view in _subs_in(r.guard, WAIT_ATTRS):
             missing = [s for s in rule_sources(r, states) if view.sub not in handled[s]]
-            if missing and (r.index, view.sub) not in reported:
-                reported.add((r.index, view.sub))
-                where = f"state `{missing[0]}`" if len(missing) == 1 else "states " + ", ".join(f"`{s}`" for s in missing)
-                diag = diags.add("E0505", view.span, f"{where} waits on `{view.sub}` but never tests `{view.sub}.error`", "waits here")
-                diag.with_note(f"if `{view.sub}` fails, plan `{plan.verb}` of `{c.name}` waits forever")
-                diag.with_help(f"add a rule such as `E9: {view.sub}.error | * -> error(1);`")
+            if missing:
+                waits.setdefault(view.sub, []).append((view, missing))
+    codes = _error_codes(plan) or _error_codes_of(c)
+    for sub, found in waits.items():
+        why = [(verb, failure_of(design, sub, verb)) for verb in verbs_sent(c, sub)]
+        why = [(verb, w) for verb, w in why if w is not None]
+        if not why:
+            continue  # nothing this controller sends `sub` can end in ERROR
+        view, _ = found[0]
+        missing = list(dict.fromkeys(s for _, ms in found for s in ms))
+        where = f"state `{missing[0]}`" if len(missing) == 1 else "states " + ", ".join(f"`{s}`" for s in missing)
+        verbs = ("wait", "test") if len(missing) > 1 else ("waits", "tests")
+        diag = diags.add("E0505", view.span, f"{where} {verbs[0]} on `{sub}` but never {verbs[1]} `{sub}.error`", "waits here")
+        for other, _ in found[1:]:
+            diag.with_label(other.span, "waits here too")
+        verb, w = why[0]
+        diag.with_note(f"`{sub}.{verb}` can fail: {w}")
+        diag.with_note(f"if `{sub}` fails, plan `{plan.verb}` of `{c.name}` waits forever")
+        code = codes[0] if codes else 1
+        diag.with_help(f"add a rule such as `E9: {sub}.error | * -> error({code});` right after the `new` rules")
+
+
+def _error_codes_of(c: m.Controller) -> list[int]:
+    return [code for plan in c.plans.values() for code in _error_codes(plan)]

@@ -1,0 +1,332 @@
+"""Values that leave their type or their declared range, proven with z3.
+
+The guard analysis (`rcsc.checks.guards`) takes declared ranges as
+assumptions (`x: i32 in 0..10` is never 20).  This family checks the other
+side of that promise: every value that a rule's job list puts into a ranged
+slot - a command argument for a ranged parameter, an assignment to a ranged
+local, status field or Global Memory variable - stays in the range; and the
+integer arithmetic of conditions and job lists neither wraps nor divides by
+zero.  Each question is asked in the context where the expression runs: the
+rule's own condition true and the earlier rules of its state false.  The
+witness gives the inputs.  Expressions that read a variable which an earlier
+job of the same list assigns are skipped (the value they see is not an
+input), and so are values computed from the controller's history, which the
+analysis does not follow: an unranged local or status field, and compound
+assignments (`count += 1`).  Plans whose conditions cannot be encoded are
+skipped too (the guard analysis reports them, W0518).
+
+W0524 value outside its declared range
+    With the witness's inputs, the value is outside the slot's range (a
+    constant argument outside it needs no solver).  The plan receiving the
+    command is checked for values inside the range only, so it can then
+    sit in `new` for ever.
+W0525 integer overflow or division by zero
+    With the witness's inputs, `+`, `-` or `*` on an integer type wraps
+    around, or `/` or `%` divides by zero (which gives 0).
+"""
+
+from __future__ import annotations
+
+import z3
+
+from rcsc import model as m
+from rcsc.checks.guards import front_end_errors, nan_params
+from rcsc.checks.plans import plan_states, rule_sources
+from rcsc.diagnostics import Diagnostics
+from rcsc.model import Design
+from rcsc.smt import F, Encoder, HasTypeError, Unsupported, concrete, format_value, real_of
+from rcsc.types import DURATION, FloatType, IntType, Type
+
+TIMEOUT_MS = 2000
+RLIMIT = 1_000_000
+I64 = IntType("i64", 64, True)
+
+
+def check(design: Design, diags: Diagnostics) -> None:
+    if front_end_errors(diags):
+        return
+    nan = nan_params(design)
+    for c in design.controllers.values():
+        cpu = design.cpus.get(c.cpu) if c.cpu else None
+        period = cpu.heartbeat_ns if cpu is not None else None
+        for plan in c.plans.values():
+            if plan.verb in c.verbs:
+                _Plan(design, c, plan, period, diags, (c.name, plan.verb) in nan).run()
+
+
+def _assigned_names(s: m.Stmt) -> set[tuple[str, str]]:
+    return {(s.target.kind, s.target.name)} if isinstance(s, m.Assign) else set()
+
+
+def _reads(e: m.Expr) -> set[tuple[str, str]]:
+    return {(x.kind, x.name) for x in m.walk_expr(e) if isinstance(x, m.Ref)}
+
+
+def _int_type(t: Type) -> IntType | None:
+    if isinstance(t, IntType):
+        return t
+    if t == DURATION:
+        return I64
+    return None
+
+
+def _needs_solver(e: m.Expr) -> bool:
+    for x in m.walk_expr(e):
+        if isinstance(x, m.Binary) and x.op in ("+", "-", "*", "/", "%") and _int_type(x.type) is not None:
+            return True
+    return False
+
+
+class _Plan:
+    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, period, diags: Diagnostics, nan: bool) -> None:
+        self.design, self.c, self.plan, self.diags = design, c, plan, diags
+        self.verb = c.verbs.get(plan.verb)
+        self.enc = Encoder(design, c, self.verb, period, nan_params=nan)
+        self.terms: dict[int, object] = {}
+        self.reported: set[tuple] = set()
+        self.solver: z3.Solver | None = None  # made on the first question
+
+    def term(self, r: m.Rule):
+        """The encoded condition of `r`, made when a question first needs it."""
+        if r.index not in self.terms:
+            self.terms[r.index] = self.enc.guard(r.guard).term  # type: ignore[arg-type]
+        return self.terms[r.index]
+
+    def run(self) -> None:
+        states = [s for s in plan_states(self.plan) if s not in ("done", "error")]
+        rules_in = {s: [r for r in self.plan.rules if s in rule_sources(r, states)] for s in states}
+        for r in self.plan.rules:
+            sources = [s for s in rule_sources(r, states) if s in rules_in]
+            if not sources:
+                continue
+
+            # Most rules ask nothing: the contexts (which encode the earlier
+            # rules' conditions) are made only when a question needs them.
+            def contexts(r=r, sources=sources) -> list[list]:
+                out = []
+                for s in sources:
+                    before = [x for x in rules_in[s] if x.index < r.index and x.guard is not None]
+                    if r.otherwise:
+                        before = [x for x in rules_in[s] if x.guard is not None]
+                    out.append([z3.Not(self.term(x)) for x in before])
+                return out
+
+            def fired(r=r, contexts=contexts) -> list[list]:
+                own = [self.term(r)] if r.guard is not None else []
+                return [ctx + own for ctx in contexts()]
+
+            if r.guard is not None:
+                self._expr_checks(r.guard, contexts, r)
+            assigned: set[tuple[str, str]] = set()
+            for job in r.jobs:
+                for e in m.stmt_exprs(job):
+                    if _reads(e) & assigned:
+                        continue
+                    self._expr_checks(e, fired, r)
+                if isinstance(job, m.Command):
+                    self._command(job, fired, r, assigned)
+                elif isinstance(job, m.Assign):
+                    self._assign(job, fired, r, assigned)
+                assigned |= _assigned_names(job)
+
+    # ---- questions ----
+
+    def _ask(self, make_contexts, bad, span=None, question: str = "") -> z3.ModelRef | None:
+        """A model of `bad` in one of the contexts; an undecided question is W0518, never a pass."""
+        try:
+            contexts = make_contexts()
+        except (Unsupported, HasTypeError):
+            return None  # a condition the guard analysis cannot encode either (W0518 there)
+        if self.solver is None:
+            self.solver = z3.Solver()
+            self.solver.set("timeout", TIMEOUT_MS)
+            self.solver.set("rlimit", RLIMIT)
+            self.added = 0
+        s = self.solver
+        # Inputs met since the last question (encoding makes them lazily).
+        inputs = list(self.enc.inputs.values())
+        for inp in inputs[self.added:]:
+            s.add(inp.constraint)
+        self.added = len(inputs)
+        for ctx in contexts:
+            s.push()
+            try:
+                s.add(*self.enc.side)
+                s.add(*ctx)
+                s.add(bad)
+                res = s.check()
+                model = s.model() if res == z3.sat else None
+            finally:
+                s.pop()
+            if model is not None:
+                return model
+            if res != z3.unsat and span is not None and (span.start, "unknown") not in self.reported:
+                self.reported.add((span.start, "unknown"))
+                d = self.diags.add("W0518", span, f"value analysis of plan `{self.plan.verb}` of `{self.c.name}` is incomplete", "not decided")
+                d.with_note(f"the solver could not decide {question}: {s.reason_unknown() or 'unknown'}")
+                d.with_help("simplify the expression, or bound its operands with a declared range")
+        return None
+
+    def _encode(self, e: m.Expr):
+        try:
+            return self.enc.expr(e, None)
+        except (Unsupported, HasTypeError):
+            return None
+
+    def _witness(self, model, exprs: list[m.Expr], r: m.Rule) -> tuple[str, dict]:
+        keys: dict[tuple, None] = {}
+        self.enc._used = {}
+        for e in exprs:
+            self._encode(e)
+        for k in self.enc._used:
+            keys.setdefault(k, None)
+        parts, out = [], {}
+        for k in keys:
+            inp = self.enc.inputs[k]
+            value = concrete(model, inp.term, inp.type, inp.members)
+            text = value if inp.type is None else format_value(value, inp.type)
+            parts.append(f"{inp.name} = {text}")
+            out[inp.name] = value if not isinstance(value, float) or value == value else "NaN"
+        return ", ".join(parts), out
+
+    def _expr_checks(self, e: m.Expr, contexts: list[list], r: m.Rule) -> None:
+        if not _needs_solver(e):
+            return
+        for x in m.walk_expr(e):
+            if not isinstance(x, m.Binary) or x.op not in ("+", "-", "*", "/", "%"):
+                continue
+            it = _int_type(x.type)
+            if it is None or (x.span.start, x.op) in self.reported:
+                continue
+            a, b = self._encode(x.left), self._encode(x.right)
+            if a is None or b is None or isinstance(a, F) or isinstance(b, F):
+                continue
+            if x.op in ("/", "%"):
+                bad, what = b == 0, "divides by zero (the result is 0)"
+            else:
+                # Operands whose declared ranges keep the result in the type
+                # need no question (a product of two variables is non-linear,
+                # hard for the solver even when the answer is obvious).
+                lo, hi = self._interval(x)
+                if it.min <= lo and hi <= it.max:
+                    continue
+                val = a + b if x.op == "+" else a - b if x.op == "-" else a * b
+                bad, what = z3.Or(val > it.max, val < it.min), f"wraps around the range of `{x.type}`"
+            model = self._ask(contexts, bad, x.span, f"whether `{x.op}` in rule `{r.label}` {what}")
+            if model is None:
+                continue
+            self.reported.add((x.span.start, x.op))
+            text, data = self._witness(model, [e] + ([r.guard] if r.guard is not None else []), r)
+            d = self.diags.add("W0525", x.span, f"`{x.op}` in rule `{r.label}` {what}", "overflow" if x.op not in ("/", "%") else "division by zero")
+            d.with_note(f"witness: {text}")
+            d.with_help("bound the operands (a declared range, a test in the condition), or use a wider type")
+            d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data}
+
+    def _interval(self, e: m.Expr) -> tuple[int, int]:
+        """Bounds of an integer expression from declared ranges, without wrapping."""
+        it = _int_type(e.type) or I64
+        full = (it.min, it.max)
+        if isinstance(e, m.Const) and isinstance(e.value, int) and not isinstance(e.value, bool):
+            return e.value, e.value
+        if isinstance(e, m.Ref):
+            var = None
+            if e.kind == "gm":
+                var = self.design.gm.get(e.name)
+            elif e.kind == "local":
+                var = self.c.locals.get(e.name)
+            elif e.kind == "status":
+                var = self.c.status_fields.get(e.name)
+            elif e.kind == "param" and self.verb is not None:
+                var = self.verb.param(e.name)
+            if var is not None and var.range is not None:
+                return int(var.range.lo), int(var.range.hi)
+            return full
+        if isinstance(e, m.Binary) and e.op in ("+", "-", "*"):
+            (a, b), (c, d) = self._interval(e.left), self._interval(e.right)
+            if e.op == "+":
+                return a + c, b + d
+            if e.op == "-":
+                return a - d, b - c
+            products = (a * c, a * d, b * c, b * d)
+            return min(products), max(products)
+        return full
+
+    def _in_range(self, value, rng: m.Range, t: Type):
+        if isinstance(value, F):
+            return z3.Or(value.nan, value.r < real_of(float(rng.lo)), value.r > real_of(float(rng.hi)))
+        return z3.Or(value < int(rng.lo), value > int(rng.hi))
+
+    def _history(self, e: m.Expr) -> bool:
+        """Whether `e` reads an unranged local or status field.
+
+        Their values are what earlier cycles computed, which the analysis
+        does not follow (it would take any value of the type): a range
+        finding on them would mostly be a false alarm.
+        """
+        for x in m.walk_expr(e):
+            if isinstance(x, m.Ref) and x.kind in ("local", "status"):
+                var = (self.c.locals if x.kind == "local" else self.c.status_fields).get(x.name)
+                if var is None or var.range is None:
+                    return True
+        return False
+
+    def _declared(self, e: m.Expr) -> m.Range | None:
+        """The declared range of a plain reference (a ranged parameter, local, ...)."""
+        if not isinstance(e, m.Ref):
+            return None
+        table = {"gm": self.design.gm, "local": self.c.locals, "status": self.c.status_fields}.get(e.kind)
+        if table is not None:
+            var = table.get(e.name)
+        elif e.kind == "param" and self.verb is not None:
+            var = self.verb.param(e.name)
+        else:
+            var = None
+        return var.range if var is not None else None
+
+    def _slot(self, e: m.Expr, rng: m.Range | None, t: Type, what: str, contexts, r: m.Rule, assigned) -> None:
+        if rng is None or _reads(e) & assigned or (e.span.start, "range") in self.reported or self._history(e):
+            return
+        own = self._declared(e)
+        if own is not None and rng.lo <= own.lo and own.hi <= rng.hi:
+            return  # a value whose own declared range fits needs no question
+        if isinstance(e, m.Const):
+            v = e.value
+            if isinstance(v, (int, float)) and not isinstance(v, bool) and rng.lo <= v <= rng.hi:
+                return
+            model, text, data = None, f"the value is {format_value(v, t)}", {}
+        else:
+            value = self._encode(e)
+            if value is None or not (isinstance(value, F) or isinstance(t, IntType) or t == DURATION):
+                return
+            model = self._ask(contexts, self._in_range(value, rng, t), e.span, f"whether {what} stays in its range")
+            if model is None:
+                return
+            text, data = self._witness(model, [e] + ([r.guard] if r.guard is not None else []), r)
+            text = "witness: " + text
+        self.reported.add((e.span.start, "range"))
+        lo, hi = format_value(rng.lo, t), format_value(rng.hi, t)
+        d = self.diags.add("W0524", e.span, f"{what} can be outside its declared range {lo}..{hi}", "out of range")
+        d.with_note(text)
+        d.with_help("keep the value in the range (clamp it, or test it in the rule's condition), or widen the range")
+        d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data}
+
+    def _command(self, cmd: m.Command, contexts, r: m.Rule, assigned) -> None:
+        sub = self.design.controllers.get(cmd.sub)
+        verb = sub.verbs.get(cmd.verb) if sub else None
+        if verb is None:
+            return
+        for p, arg in zip(verb.params, cmd.args):
+            self._slot(arg, p.range, p.type, f"argument `{p.name}` of `{cmd.sub}.{cmd.verb}`", contexts, r, assigned)
+
+    def _assign(self, job: m.Assign, contexts, r: m.Rule, assigned) -> None:
+        if job.target.path:
+            return
+        t = job.target
+        var = {"gm": self.design.gm, "local": self.c.locals, "status": self.c.status_fields}.get(t.kind, {}).get(t.name)
+        if var is None or var.range is None:
+            return
+        if job.op != "=":
+            # `count += 1` stays in range or not according to how often it
+            # ran before: history, which the analysis does not follow.
+            return
+        self._slot(job.value, var.range, var.type, f"`{t.name}`", contexts, r, assigned)

@@ -1,0 +1,45 @@
+"""The witnesses of the value and wait findings say what the case files mean.
+
+tests/cases asserts code, line and column; these tests assert the witness
+values too, where the finding has one.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rcsc.driver import check_path
+
+CASES = Path(__file__).parent / "cases"
+
+
+def _by_line(name: str, code: str) -> dict[int, dict]:
+    result = check_path(str(CASES / name))
+    return {d.span.line: d.data for d in result.diags if d.code == code}
+
+
+def test_range_flow_witnesses() -> None:
+    found = _by_line("W0524_range_flow.rcs", "W0524")
+    assert found[20]["witness"] == {}  # a constant: no input needed
+    assert found[21]["witness"]["depth"] > 11  # depth - 1 > 10
+    assert found[22]["witness"]["depth"] not in range(-11, 0)  # n = depth + 11 outside 0..10
+    assert found[23]["witness"]["cmd.k"] > 10 and found[23]["witness"]["depth"] == 1
+
+
+def test_overflow_and_division_witnesses() -> None:
+    found = _by_line("W0525_overflow_division.rcs", "W0525")
+    w = found[21]["witness"]
+    assert w["a"] > 0 and w["a"] + w["b"] > 2**31 - 1
+    assert abs(found[22]["witness"]["a"] * 3) > 2**31 - 1
+    assert found[23]["witness"]["b"] == 0 and found[23]["witness"]["a"] < -10
+
+
+def test_nan_reaches_a_parameter_only_through_a_supervisor() -> None:
+    found = _by_line("W0517_nan_from_supervisor.rcs", "W0517")
+    assert list(found) == [25]
+    assert found[25]["witness"] == {"cmd.x": "NaN"} and found[25]["replayed"] is True
+
+
+def test_a_duration_parameter_is_not_a_wait_for_ever() -> None:
+    result = check_path(str(CASES / "ok_duration_waits.rcs"))
+    assert [d.code for d in result.diags] == []

@@ -1,0 +1,95 @@
+""""Did you mean" helps for misspelt names and foreign operators (rcsc.hints)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from rcsc.driver import check_path
+
+TYPOS = """\
+design d
+const LIMIT: i32 = 3
+enum Mode { AUTO, MANUAL }
+record XY { east: f64, north: f64 }
+gm level_m: f64 = 0.0 from env
+gm pos: XY = XY(east = 0.0, north = 0.0) from env
+controller TOP level 2 budget 1 ms {
+    subordinates LOW
+    reads level_m, pos
+    local count: i32 = 0
+    verb FILL_TO(mode: Mode)
+    plan FILL_T0 {
+        E0: true | new -> done;
+    }
+    verb RUN
+    plan RUN {
+        E0: levl_m > pos.est and count < LIMT and Mode.AUT == Mode.AUTO | new -> AT_LOAD | LOW.GOO();
+        E9: LOW.error | * -> error(1);
+        E1: LOW.dne | AT_LOAD -> AT_UNLOAD;
+        E2: true | AT_UNLOD -> done;
+        E3: LOW.done | AT_UNLOAD -> done;
+    }
+}
+controller LOW level 1 budget 1 ms {
+    verb GO
+    plan GO { E0: true | new -> done; }
+}
+cpu main {
+    heartbeat 10 ms
+    schedule TOP, LOW
+}
+"""
+
+
+def _helps(tmp_path: Path, text: str) -> dict[tuple[str, str], list[str]]:
+    path = tmp_path / "d.rcs"
+    path.write_text(text, encoding="utf-8")
+    return {(d.code, d.span.text): d.helps for d in check_path(str(path)).diags}
+
+
+def test_misspelt_names_get_the_closest_declared_name(tmp_path: Path) -> None:
+    helps = _helps(tmp_path, TYPOS)
+    expected = {
+        ("E0501", "FILL_T0"): "FILL_TO",
+        ("E0100", "levl_m"): "level_m",
+        ("E0100", "LIMT"): "LIMIT",
+        ("E0103", "AUT"): "AUTO",
+        ("E0103", "est"): "east",
+        ("E0105", "GOO"): "GO",
+        ("E0103", "dne"): "done",
+    }
+    for key, name in expected.items():
+        assert key in helps, (key, sorted(helps))
+        assert helps[key][0] == f"did you mean `{name}`?", (key, helps[key])
+
+
+def test_a_misspelt_state_is_not_a_new_state(tmp_path: Path) -> None:
+    text = TYPOS.replace("levl_m > pos.est and count < LIMT and Mode.AUT", "level_m > pos.east and count < LIMIT and Mode.AUTO")
+    text = text.replace("FILL_T0", "FILL_TO").replace("GOO", "GO").replace("dne", "done")
+    helps = _helps(tmp_path, text)
+    assert helps[("E0502", "AT_UNLOD")][0].startswith("did you mean `AT_UNLOAD`?")
+
+
+def test_unrelated_names_get_no_guess(tmp_path: Path) -> None:
+    helps = _helps(tmp_path, TYPOS.replace("levl_m", "pressure"))
+    assert not any(h.startswith("did you mean") for h in helps[("E0100", "pressure")])
+
+
+@pytest.mark.parametrize(
+    "written,word",
+    [("count < LIMIT && count > 0", "and"), ("count < LIMIT || count > 0", "or"), ("!(count < LIMIT)", "not")],
+)
+def test_foreign_operators(tmp_path: Path, written: str, word: str) -> None:
+    text = TYPOS.replace("levl_m > pos.est and count < LIMT and Mode.AUT == Mode.AUTO", written)
+    helps = _helps(tmp_path, text)
+    assert len(helps) == 1, helps
+    (code, _), hs = next(iter(helps.items()))
+    assert code in ("E0001", "E0002") and hs[0].startswith(f"rcs writes `{word}`"), hs
+
+
+def test_else_if_is_elif(tmp_path: Path) -> None:
+    text = TYPOS.replace("    verb RUN\n", "    verb RUN\n    pre { if count > 0 { count = 1; } else if count < 0 { count = 2; } }\n")
+    helps = _helps(tmp_path, text)
+    assert [h[0] for h in helps.values()] == ["rcs writes `elif` for `else if`"], helps
