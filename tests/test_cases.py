@@ -54,7 +54,7 @@ _EXPECT = re.compile(r"(?://|#)\s*expect:\s*([EW]\d{4})\s*@\s*(\d+):(\d+)\s*$")
 
 def _roots() -> list[Path]:
     roots = sorted(CASES.glob("*.rcs"))
-    for d in sorted(p for p in CASES.iterdir() if p.is_dir()):
+    for d in sorted(p for p in CASES.iterdir() if p.is_dir() and not p.name.startswith(".")):  # not .rcsc-cache
         root = d / ROOT_FILE
         assert root.is_file(), f"case folder {d.name} has no {ROOT_FILE}"
         roots.append(root)
