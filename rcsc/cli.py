@@ -4,7 +4,7 @@ Each subcommand is one entry of `COMMANDS`: a function that adds its arguments
 to its own sub-parser and a function that runs it and returns the exit code.
 A new command (sim, test, build, graph, ...) is two functions and one entry.
 
-Contract with CI (DESIGN.md section 6):
+Contract with CI (docs/ci.md):
 
 - exit codes: 0 clean, 1 findings at error level (or any warning with
   `--deny-warnings`), 2 usage, I/O or internal error, 130 interrupted;

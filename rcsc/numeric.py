@@ -1,4 +1,4 @@
-"""The numeric rules of the language (DESIGN.md section 3), in one place.
+"""The numeric rules of the language (docs/language.md §5), in one place.
 
 These functions are the reference: the constant folder, the simulator and the
 conformance tests of the backends all use them.  Integers are fixed width and

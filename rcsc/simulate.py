@@ -1,6 +1,6 @@
 """The reference interpreter: one executable definition of the cycle semantics.
 
-It implements DESIGN.md section 3 over the checked design model, and every
+It implements the cycle semantics of docs/language.md over the checked design model, and every
 backend is compared against it byte for byte (through the trace, see
 `rcsc.trace`).  A `Simulator` runs the cycles of one CPU: increment the cycle
 counter, apply the scenario's operator commands and environment inputs, step

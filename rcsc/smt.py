@@ -32,7 +32,7 @@ Types
 - bool: z3 Bool.  Enums and views: an integer holding the member's index,
   constrained to the members.  Both exact.
 - i32, i64, u32 and durations (i64 nanoseconds): z3 integers constrained to
-  the type's range, with DESIGN.md section 3's wrapping made explicit, so the
+  the type's range, with the language's wrapping made explicit, so the
   encoding is exact: `+ - neg abs` wrap with one conditional
   (`x > MAX ? x - 2^n : ...`, exact because the operands are in range),
   products with a constant and conversions wrap with `mod 2^n`, integer

@@ -1,4 +1,4 @@
-"""The numeric rules (DESIGN.md section 3), each at its edge, in the simulator and the folder.
+"""The numeric rules (docs/language.md §5), each at its edge, in the simulator and the folder.
 
 Integers wrap (two's complement), integer division truncates toward zero,
 division or remainder by zero gives 0, i32 MIN / -1 wraps to MIN, f64 is

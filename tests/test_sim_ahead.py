@@ -5,7 +5,7 @@ TB finishes any command in two cycles: in the cycle a command arrives it
 takes its `new` rule, in the next cycle it reports DONE.  Inputs and operator
 commands for cycle N are applied before any controller steps in cycle N.
 
-Derivation from DESIGN.md section 3 (PR steps first, then TB, every cycle):
+Derivation from the cycle semantics (docs/language.md) (PR steps first, then TB, every cycle):
 
  c1  ship BACK, operator AHEAD(5) serial 1.  PR: new command (echo 1, state
      new); E1 fires (ship moving back): TB.STOP with serial 1; next S2.

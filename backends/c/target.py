@@ -3,7 +3,7 @@
 Every name in the generated C comes from `naming.CNames` (`self.n`), one
 method per kind of name, so that no two things of the design get one name.
 
-Numbers follow DESIGN.md section 3 without undefined behaviour: integer
+Numbers follow the numeric rules (docs/language.md §5) without undefined behaviour: integer
 arithmetic goes through the helpers of rcs_num.h (wrapping in the unsigned
 type), f64 arithmetic is plain C (built with -ffp-contract=off).
 """

@@ -11,7 +11,7 @@ so the library allows the naming lints.  Design-wide items live in `types`
 functions); a controller's states and rules are associated constants of its
 struct (`Self::S_S1`, `Self::RULE_AHEAD_E0`).
 
-Numbers follow DESIGN.md section 3 with no panic even under
+Numbers follow the numeric rules (docs/language.md §5) with no panic even under
 `overflow-checks = true`: integer arithmetic is `wrapping_*` (as
 `i32::wrapping_add(a, b)`) or a helper of `num` (division, remainder,
 abs), f64 arithmetic is plain Rust, conversions are `as` (which saturates

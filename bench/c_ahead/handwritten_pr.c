@@ -3,7 +3,7 @@
  *
  * The baseline for bench/bench_c_step.py: what a programmer following the
  * paper would write for submarine.rcs's PR AHEAD plan, with the echo-serial
- * protocol of DESIGN.md section 3 added (the paper's template compares
+ * protocol of rcsc's cycle semantics added (the paper's template compares
  * command numbers but never checks that the subordinate's status answers the
  * command last sent).  It works on the generated buffers (submarine.h) so
  * that the driver can compare both versions buffer for buffer after every

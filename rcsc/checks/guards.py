@@ -1,4 +1,4 @@
-"""Determinism and coverage of state tables, proven with z3 (DESIGN.md section 4).
+"""Determinism and coverage of state tables, proven with z3 (docs/language.md, the guard analysis).
 
 For every state of every plan this family asks the solver, over the inputs
 the controller reads when it decides (`rcsc.smt` says how each input and

@@ -149,7 +149,7 @@ static inline uint32_t rcs_max_u32(uint32_t a, uint32_t b) { return a >= b ? a :
 #define RCS_INF (__builtin_inf())
 #define RCS_NAN (__builtin_nan(""))
 
-/* The supervisor's view of a subordinate (DESIGN.md section 3): the status
+/* The supervisor's view of a subordinate (rcsc's cycle semantics): the status
  * answers the command last sent only when the echo matches its serial. */
 static inline bool rcs_sub_current(const rcs_status_head *h, uint32_t sent) { return sent != 0u && h->echo_serial == sent; }
 static inline bool rcs_sub_done(const rcs_status_head *h, uint32_t sent) { return rcs_sub_current(h, sent) && h->status == RCS_DONE; }
