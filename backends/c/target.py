@@ -32,6 +32,10 @@ INT_SUFFIX = {"i32": "i32", "i64": "i64", "u32": "u32", "duration": "i64"}
 ARITH = {"+": "add", "-": "sub", "*": "mul", "/": "div", "%": "rem"}
 
 
+def _is_zero(e: m.Expr) -> bool:
+    return isinstance(e, m.Const) and e.value == 0
+
+
 def c_comment(text: str) -> str:
     """Text that is safe inside /* ... */ and on one line."""
     return re.sub(r"\s+", " ", text.replace("*/", "* /")).strip()
@@ -181,6 +185,15 @@ class CTarget(Target):
         if e.op in ("and", "or"):
             return f"({a} {'&&' if e.op == 'and' else '||'} {b})"
         if e.type == BOOL:
+            if a == b and not isinstance(e.left.type, FloatType):
+                # `x == x` is legal in a design but a -Wtautological-compare error in C.
+                t = e.left.type
+                suffix = "bool" if t == BOOL else "i32" if isinstance(t, EnumType) else INT_SUFFIX[t.name]
+                b = f"rcs_same_{suffix}({b})"
+            elif e.left.type == U32 and e.op in ("<", "<=", ">", ">="):
+                # `u >= 0` is legal in a design but a -Wtype-limits error in C.
+                a = f"rcs_same_u32({a})" if _is_zero(e.left) else a
+                b = f"rcs_same_u32({b})" if _is_zero(e.right) else b
             return f"({a} {e.op} {b})"
         if e.type.name in INT_SUFFIX:
             return f"rcs_{ARITH[e.op]}_{INT_SUFFIX[e.type.name]}({a}, {b})"
