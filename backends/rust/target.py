@@ -340,6 +340,10 @@ class RustTarget(Target):
     def assign_stmt(self, s: m.Assign, indent: int) -> list[str]:
         target = self.lvalue(s.target)
         value = self.expr(s.value)
+        if s.op == "=" and isinstance(value, Atom) and value.text == target:
+            # `x = x;` is legal in a design and does nothing; written in Rust
+            # it is a dead_code warning and a clippy::self_assignment error.
+            return [f"{pad(indent)}// {target} = {target}: no effect"]
         if s.op == "=":
             return assign(target, "=", value, indent)
         op = s.op[0]
