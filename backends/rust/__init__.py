@@ -58,6 +58,8 @@ EXPR_ALLOWS = [
     "clippy::overly_complex_bool_expr",
     "clippy::ifs_same_cond",
     "clippy::neg_multiply",
+    "clippy::redundant_comparisons",
+    "clippy::impossible_comparisons",
 ]
 
 
