@@ -216,7 +216,7 @@ def rust_batch(prepared: list[Prepared], base: Path, jobs: int, steps: tuple[str
         noise = [x for x in stderr.splitlines() if re.match(r"^(warning|error)", x) and "build failed" not in x
                  and "could not compile" not in x and "generated" not in x]
         if noise:
-            out.append(Finding(-1, "warning", what, "\n".join(noise)))
+            out.append(Finding(-1, "warning", what, "\n".join(noise) + "\n" + stderr[-3000:]))
     for name, p in members.items():
         if name in failed:
             continue
