@@ -77,6 +77,9 @@ HOSTILE_WORDS = [
     "Option", "Some", "None", "Ok", "Err", "Result", "Vec", "String", "Default", "Clone", "Copy", "u8", "i8",
     "usize", "f32", "core", "std", "alloc", "step", "init", "buf", "cmd_", "status_", "gm_", "new_", "state",
     "ST_NEW", "RULE", "serial", "echo", "rcs", "num", "Externs", "host", "lib", "types", "functions",
+    # the language's own contextual keywords
+    "level", "status", "done", "error", "from", "budget", "verb", "plan", "otherwise", "continuous", "ordered",
+    "report", "reads", "writes", "local", "pre", "post", "then", "elif", "heartbeat", "schedule", "env",
 ]
 
 

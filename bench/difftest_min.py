@@ -4,9 +4,10 @@
 whether a candidate still shows the failure, and shrinks greedily, keeping
 every candidate whose design still checks without errors and whose scenario
 still loads (`difftest_gen.check_case`): scenario lines are dropped and the
-cycle count lowered, then the design's brace blocks (controller items such as
+cycle count lowered, then whole controllers (with their places in
+`subordinates` and `schedule` and the lines that use them), the design's brace blocks (controller items such as
 `pre`/`post`, plans, `if` statements), single lines (rules, statements,
-declarations), jobs of rules, and finally expressions are replaced by one of
+declarations), names of `reads`/`writes`/`reports` lists, jobs of rules, and finally expressions are replaced by one of
 their parenthesised sub-expressions.  It repeats until a whole pass changes
 nothing or the time budget is spent.
 
@@ -126,11 +127,88 @@ def shrink_design(s: Shrinker, case: Case) -> Case:
         if i >= len(cur):
             break
         if cur[i].strip() and not cur[i].lstrip().startswith("design "):
-            cand = replace(case, design="\n".join(cur[:i] + cur[i + 1:]))
-            if s.accept(cand):
-                case = cand
+            # One line, or two (a function and its body).
+            cands = [cur[:i] + cur[i + 1:]] + ([cur[:i] + cur[i + 2:]] if cur[i].startswith("fn ") else [])
+            if any(s.accept(c := replace(case, design="\n".join(lines_))) for lines_ in cands):
+                case = c
                 continue
         i += 1
+    return case
+
+
+def shrink_verbs(s: Shrinker, case: Case) -> Case:
+    """Drop a verb together with its plan (and the commands that send it)."""
+    for verb in re.findall(r"^    verb (\w+)", case.design, re.M):
+        if s.out_of_time():
+            break
+        lines, out, skip = case.design.split("\n"), [], False
+        for line in lines:
+            if re.match(rf"^    verb {verb}\b", line) or re.search(rf"\.{verb}\(", line):
+                continue
+            if re.match(rf"^    plan {verb}\b", line):
+                skip = True
+            if skip:
+                skip = line != "    }"
+                continue
+            out.append(line)
+        cand = replace(case, design="\n".join(out))
+        if s.accept(cand):
+            case = cand
+    return case
+
+
+def _without_controller(design: str, name: str) -> str:
+    """The design without controller `name`: its block, its place in lists, the lines that use it."""
+    lines = design.split("\n")
+    out, skip = [], False
+    for line in lines:
+        if re.match(rf"^(controller|simulator) {re.escape(name)} ", line):
+            skip = True
+        if skip:
+            skip = line != "}"
+            continue
+        if re.search(rf"\b{re.escape(name)}\.", line):
+            continue
+        m = re.match(r"^(\s*(subordinates|schedule) )(.*)$", line)
+        if m:
+            items = [x.strip() for x in m.group(3).split(",") if x.strip() != name]
+            if not items:
+                continue
+            line = m.group(1) + ", ".join(items)
+        out.append(line)
+    return "\n".join(out)
+
+
+def shrink_controllers(s: Shrinker, case: Case) -> Case:
+    for name in re.findall(r"^(?:controller|simulator) (\w+) ", case.design, re.M)[1:]:
+        if s.out_of_time():
+            break
+        cand = replace(case, design=_without_controller(case.design, name))
+        if s.accept(cand):
+            case = cand
+    return case
+
+
+def shrink_lists(s: Shrinker, case: Case) -> Case:
+    """Drop single names from `reads`, `writes`, `subordinates` and `reports` lists."""
+    i = 0
+    while not s.out_of_time():
+        lines = case.design.split("\n")
+        if i >= len(lines):
+            break
+        m = re.match(r"^(\s*(reads|writes|reports) )(.*)$", lines[i])
+        changed = False
+        if m:
+            items = [x.strip() for x in m.group(3).split(",")]
+            for k in range(len(items)):
+                rest = items[:k] + items[k + 1:]
+                new = [m.group(1) + ", ".join(rest)] if rest else []
+                cand = replace(case, design="\n".join(lines[:i] + new + lines[i + 1:]))
+                if s.accept(cand):
+                    case, changed = cand, True
+                    break
+        if not changed:
+            i += 1
     return case
 
 
@@ -179,12 +257,15 @@ def minimise(case: Case, fails: Predicate, budget_s: float = 300.0) -> tuple[Cas
     while not s.out_of_time():
         before = (case.design, case.scenario)
         case = shrink_scenario(s, case)
+        case = shrink_controllers(s, case)
+        case = shrink_verbs(s, case)
         case = shrink_design(s, case)
+        case = shrink_lists(s, case)
         case = shrink_jobs(s, case)
         case = shrink_exprs(s, case)
         if (case.design, case.scenario) == before:
             break
-    return case, s.tries
+    return replace(case, design=re.sub(r"\n{3,}", "\n\n", case.design)), s.tries
 
 
 def finding_predicate(kind: str, where: str, pattern: str = "") -> Predicate:
