@@ -57,6 +57,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--targets", default="c,rust")
     ap.add_argument("--batch", type=int, default=10, help="seeds per cargo workspace")
     ap.add_argument("--out", default="difftest-repros", help="folder for the repros of failing seeds")
+    ap.add_argument("--max-seconds", type=float, default=0.0,
+                    help="start no new batch after this many seconds (0: no limit); the figures cover the seeds run")
     ap.add_argument("--minimise", action="store_true", help="shrink each failing seed (slow)")
     ap.add_argument("--minimise-seconds", type=float, default=300.0)
     args = ap.parse_args(argv)
@@ -69,7 +71,11 @@ def main(argv: list[str] | None = None) -> int:
     failing: dict[int, list[Finding]] = {}
     cases = {}
     retries = 0
+    ran = seeds
     for i in range(0, len(seeds), args.batch):
+        if args.max_seconds and time.monotonic() - start > args.max_seconds:
+            ran = seeds[:i]
+            break
         t0 = time.monotonic()
         batch = [generate(s, hostile=args.hostile_names, hostile_literals=args.hostile_literals) for s in seeds[i:i + args.batch]]
         gen_time += time.monotonic() - t0
@@ -95,8 +101,8 @@ def main(argv: list[str] | None = None) -> int:
             small, tries = minimise(case, finding_predicate(f.kind, f.where), args.minimise_seconds)
             print(f"seed {seed}: minimised in {tries} candidates to {len(small.design.splitlines())} design lines", flush=True)
         print(f"seed {seed}: repro in {write_repro(out, case, fs, small)}")
-    print(f"\nseeds {seeds[0]}..{seeds[-1]}: {len(seeds)} designs in {elapsed:.0f} s "
-          f"({len(seeds) / elapsed * 60:.1f} designs/min; generation and checks {gen_time:.0f} s, {retries} redraws), "
+    print(f"\nseeds {ran[0]}..{ran[-1]}: {len(ran)} designs in {elapsed:.0f} s "
+          f"({len(ran) / elapsed * 60:.1f} designs/min; generation and checks {gen_time:.0f} s, {retries} redraws), "
           f"targets {','.join(targets)}{', hostile names' if args.hostile_names else ''}")
     print(f"disagreements: {kinds['disagree']}, warnings: {kinds['warning']}, failures: {kinds['fail']}, "
           f"crashes: {kinds['crash']}, invalid designs: {kinds['invalid']}, failing seeds: {len(failing)}")

@@ -31,8 +31,8 @@ GEN_SEEDS = range(0, 30)
 def case_of(seed: int, hostile: bool = False):
     return generate(seed, hostile=hostile)
 
-# A fixed slice: about a minute on two cores.
-SLICE = [1000, 1001, 1002, 1003, 1004, 1005, 1006, 1007]
+# A fixed slice: under a minute on two idle cores.
+SLICE = [1000, 1001, 1002, 1003, 1004, 1005]
 
 
 @pytest.mark.parametrize("hostile", [False, True], ids=["plain", "hostile-names"])
