@@ -93,7 +93,9 @@ def main(argv: list[str] | None = None) -> int:
     elapsed = time.monotonic() - start
     for seed, fs in sorted(failing.items()):
         case = cases.get(seed)
-        if case is None:  # a finding of the whole batch (seed -1)
+        if case is None:  # a finding of a whole batch (seed -1)
+            out.mkdir(parents=True, exist_ok=True)
+            (out / "batch-findings.txt").write_text("\n\n".join(f"{f.where}:\n{f.detail}" for f in fs), encoding="utf-8")
             continue
         small = None
         if args.minimise:

@@ -41,6 +41,9 @@ RUST_CONFIGS = ("rust-debug", "rust-release")
 _PROFILE_NOTE = re.compile(r"^warning: profiles for the non root package will be ignored.*\n(^(package|workspace):.*\n)*", re.M)
 
 
+_INFRA = re.compile(r"failed to run `rustc` to learn about target-specific information")
+
+
 @dataclass
 class Finding:
     seed: int
@@ -200,6 +203,10 @@ def rust_batch(prepared: list[Prepared], base: Path, jobs: int, steps: tuple[str
         if what == "clippy":
             argv += ["--", "-D", "warnings"]
         proc = subprocess.run(argv, cwd=ws, env=env, capture_output=True, text=True)
+        if _INFRA.search(proc.stderr):
+            # cargo could not start rustc at all (seen on a loaded machine):
+            # not a finding about the code; the step is run again once.
+            proc = subprocess.run(argv, cwd=ws, env=env, capture_output=True, text=True)
         for line in proc.stdout.splitlines():
             msg = json.loads(line)
             if msg.get("reason") != "compiler-message":
