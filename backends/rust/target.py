@@ -314,11 +314,11 @@ class RustTarget(Target):
             return Bin.make("/", Cast.make(args[0], "f64"), Atom("1e9"))
         is_float = isinstance(e.type, FloatType)
         if e.func == "abs":
+            if e.type == U32:
+                return args[0]  # |x| of an unsigned value is x (and needs no `num`)
             self.uses.add("num")
             if is_float:
                 return Call("num::fabs", args)
-            if e.type == U32:
-                return args[0]  # |x| of an unsigned value is x
             return Call(f"num::abs_{INT_NAME[e.type.name]}", args)
         if is_float:
             self.uses.add("num")
