@@ -17,9 +17,11 @@ guard analysis of `rcsc check` stays fast.  A design that still does not check
 clean (a condition that happens to be always false, say) is drawn again from
 the next sub-seed; `Case.attempt` says how many draws it took.
 
-`hostile_literals=True` also writes integer constants where the Rust target
-does not type them (`i32(if c then u32(1) else u32(4294967295))`): a known
-problem of literal typing, left out by default.
+`hostile_literals=True` also writes `if` expressions whose branches are both
+integer constants, which the Rust target leaves untyped where the context
+gives no type (`i32(if c then u32(1) else u32(4294967295))`, `(if c then
+u32(4294967295) else u32(3)) == 2147483648`): a known problem of literal
+typing, left out by default.
 
 `hostile=True` draws names that are reserved words or well-known macros of C
 and Rust, names that collide once joined with `_`, and very long names:
@@ -269,7 +271,10 @@ class DesignGen:
                     return f"abs({self.expr(t, scope, d, anch)})"
                 return f"{f}({self.expr(t, scope, d, anch)}, {self.expr(t, scope, d, anch)})"
             if k < 0.78:
-                return f"(if {self.cond(scope, d)} then {self.expr(t, scope, d, anch)} else {self.expr(t, scope, d, anch)})"
+                then = self.expr(t, scope, d, anch)
+                if t in INT_TYPES and not self.hostile_literals:
+                    then = self.nonconst(t, scope) or then
+                return f"(if {self.cond(scope, d)} then {then} else {self.expr(t, scope, d, anch)})"
             if k < 0.86 and t == "f64":
                 return f"seconds({self.expr('duration', scope, d)})"
             if k < 0.93:
@@ -305,6 +310,16 @@ class DesignGen:
             rec = self.records[t]
             return f"{t}(" + ", ".join(f"{f} = {self.expr(ft, scope, d)}" for f, ft in rec.fields) + ")"
         return self.leaf(t, scope)
+
+    def nonconst(self, t: str, scope: list[Var]) -> str | None:
+        """A value of integer type t that the checker cannot fold: a variable, or a
+        conversion of one.  An `if` with such a branch has a type in the Rust
+        target even where its context gives none (see --hostile-literals)."""
+        same = [v.name for v in scope if v.type == t]
+        if same:
+            return self.rng.choice(same)
+        nums = [v.name for v in scope if v.type in NUM_TYPES]
+        return f"{t}({self.rng.choice(nums)})" if nums else None
 
     def call(self, t: str, scope: list[Var], depth: int) -> str | None:
         cands = [(n, [pt for _, pt in ps]) for n, ps, rt in self.fns if rt == t]
