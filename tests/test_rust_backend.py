@@ -226,6 +226,16 @@ def test_a_minimal_design_builds_clean(builds: Builds, tmp_path: Path) -> None:
     assert _run(exe, tmp_path / "go.scn", tmp_path) == reference_trace(design, tmp_path / "go.scn")
 
 
+def test_abs_of_u32_imports_nothing(tmp_path: Path) -> None:
+    """`abs(x)` of a u32 is `x`: a function module that needs nothing else does not import `num`."""
+    design = tmp_path / "absu.rcs"
+    design.write_text(MINIMAL + "\nfn keep(x: u32) -> u32 = abs(x)\n", encoding="utf-8")
+    generate(design, "rust", tmp_path / "out")
+    functions = (tmp_path / "out/src/functions.rs").read_text(encoding="utf-8")
+    assert "pub fn keep(x: u32) -> u32" in functions
+    assert "use crate::num;" not in functions
+
+
 def test_controller_works_in_the_buffers_with_the_shared_rule_layout(tmp_path: Path) -> None:
     """As the C target: the command, the subordinates' status, Global Memory and the
     own status are read and written in place (no copies in the controller), commands

@@ -25,6 +25,22 @@ C_INT_MACRO = {"i32": "INT32", "i64": "INT64", "u32": "UINT32"}
 ARITH = {"+": "add", "-": "sub", "*": "mul", "/": "div", "%": "rem"}
 
 
+def _same_suffix(t: Type) -> str:
+    """The rcs_same_* identity of an operand type other than f64."""
+    return "bool" if t == BOOL else "i32" if isinstance(t, EnumType) else INT_SUFFIX[t.name]
+
+
+def _compares_const(e: m.Expr) -> bool:
+    """A comparison of a non-f64 value with a constant (clang checks pairs of them for overlap)."""
+    return (isinstance(e, m.Binary) and e.op in ("==", "!=", "<", "<=", ">", ">=")
+            and not isinstance(e.left.type, (FloatType, RecordType))
+            and (isinstance(e.left, m.Const) or isinstance(e.right, m.Const)))
+
+
+def _is_zero(e: m.Expr) -> bool:
+    return isinstance(e, m.Const) and e.value == 0
+
+
 def c_comment(text: str) -> str:
     """Design text made safe inside a one-line `/* ... */` (the C target's comment
     sanitiser).  White space runs become one space, so no newline ends the line
@@ -196,11 +212,26 @@ class CTarget(Target):
             return f"rcs_neg_{INT_SUFFIX[e.type.name]}({v})"
         return f"(-{v})"
 
-    def binary_expr(self, e: m.Binary) -> str:
+    def binary_expr(self, e: m.Binary, opaque_consts: bool = False) -> str:
         a, b = self.expr(e.left), self.expr(e.right)
         if e.op in ("and", "or"):
+            if _compares_const(e.left) and _compares_const(e.right):
+                # `x > 3 and x < 2` is legal in a design but a clang
+                # -Wtautological-overlap-compare error in C: the constant of
+                # the second comparison goes through the identity.
+                b = self.binary_expr(e.right, opaque_consts=True)  # type: ignore[arg-type]
             return f"({a} {'&&' if e.op == 'and' else '||'} {b})"
         if e.type == BOOL:
+            if a == b and not isinstance(e.left.type, FloatType):
+                # `x == x` is legal in a design but a -Wtautological-compare error in C.
+                b = f"rcs_same_{_same_suffix(e.left.type)}({b})"
+            elif opaque_consts:
+                a = f"rcs_same_{_same_suffix(e.left.type)}({a})" if isinstance(e.left, m.Const) else a
+                b = f"rcs_same_{_same_suffix(e.right.type)}({b})" if isinstance(e.right, m.Const) else b
+            elif e.left.type == U32 and e.op in ("<", "<=", ">", ">="):
+                # `u >= 0` is legal in a design but a -Wtype-limits error in C.
+                a = f"rcs_same_u32({a})" if _is_zero(e.left) else a
+                b = f"rcs_same_u32({b})" if _is_zero(e.right) else b
             return f"({a} {e.op} {b})"
         if e.type.name in INT_SUFFIX:
             return f"rcs_{ARITH[e.op]}_{INT_SUFFIX[e.type.name]}({a}, {b})"

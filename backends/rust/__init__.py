@@ -50,6 +50,22 @@ EXPR_ALLOWS = [
     "clippy::if_same_then_else",
     "clippy::needless_bool",
     "clippy::manual_clamp",
+    # Comparisons that a type's range decides (`u >= 0` with u: u32, `x <
+    # i32::MIN`), conditions that repeat (`if a {} else if a {}`) or contradict
+    # themselves (`x < 1 and x > 2`), `x * -1`, `x += x * 2.0`, `x < NAN`, `if c { b = true; } else { b = false; }`, `x < y or x == y`,
+    # `min(max(x, 5), 3)` are legal in a design and mean what they say.
+    "unused_comparisons",
+    "clippy::absurd_extreme_comparisons",
+    "clippy::overly_complex_bool_expr",
+    "clippy::ifs_same_cond",
+    "clippy::neg_multiply",
+    "clippy::redundant_comparisons",
+    "clippy::impossible_comparisons",
+    "clippy::misrefactored_assign_op",
+    "invalid_nan_comparisons",
+    "clippy::needless_bool_assign",
+    "clippy::double_comparisons",
+    "clippy::min_max",
 ]
 
 

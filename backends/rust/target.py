@@ -313,11 +313,11 @@ class RustTarget(Target):
             return Bin.make("/", Cast.make(args[0], "f64"), Atom("1e9"))
         is_float = isinstance(e.type, FloatType)
         if e.func == "abs":
+            if e.type == U32:
+                return args[0]  # |x| of an unsigned value is x (and needs no `num`)
             self.uses.add("num")
             if is_float:
                 return Call("num::fabs", args)
-            if e.type == U32:
-                return args[0]  # |x| of an unsigned value is x
             return Call(f"num::abs_{INT_NAME[e.type.name]}", args)
         if is_float:
             self.uses.add("num")
@@ -339,6 +339,10 @@ class RustTarget(Target):
     def assign_stmt(self, s: m.Assign, indent: int) -> list[str]:
         target = self.lvalue(s.target)
         value = self.expr(s.value)
+        if s.op == "=" and isinstance(value, Atom) and value.text == target:
+            # `x = x;` is legal in a design and does nothing; written in Rust
+            # it is a dead_code warning and a clippy::self_assignment error.
+            return [f"{pad(indent)}// {target} = {target}: no effect"]
         if s.op == "=":
             return assign(target, "=", value, indent)
         op = s.op[0]

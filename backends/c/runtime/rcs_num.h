@@ -89,6 +89,16 @@ static inline uint32_t rcs_div_u32(uint32_t a, uint32_t b) { return b == 0u ? 0u
 static inline uint32_t rcs_rem_u32(uint32_t a, uint32_t b) { return b == 0u ? 0u : a % b; }
 static inline uint32_t rcs_abs_u32(uint32_t a) { return a; }
 
+/* ---- the identity, for `x == x` and `u >= 0` ----
+ * A design may compare a value with itself, or a u32 with 0; written as such
+ * in C, gcc and clang reject it (-Wtautological-compare, -Wtype-limits).  The
+ * generator passes one operand of such a comparison through these (enums are
+ * int32_t, durations int64_t); f64 needs none, `x == x` being the NaN test. */
+static inline bool rcs_same_bool(bool x) { return x; }
+static inline int32_t rcs_same_i32(int32_t x) { return x; }
+static inline int64_t rcs_same_i64(int64_t x) { return x; }
+static inline uint32_t rcs_same_u32(uint32_t x) { return x; }
+
 /* ---- f64 ---- */
 static inline bool rcs_isnan(double x) { return x != x; }
 /* fabs without libm (a gcc/clang builtin, one instruction): -0.0 gives 0.0

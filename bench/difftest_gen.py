@@ -1,0 +1,698 @@
+"""Random valid designs and scenarios for the differential tester (bench/difftest.py).
+
+`generate(seed)` returns a `Case`: the text of a design that `rcsc check`
+accepts without errors and the text of a scenario for it.  The same seed gives
+the same bytes.  The generator covers the whole language: every scalar type
+and every conversion between them, numeric edges (wrap-around, division by
+zero, MIN / -1, saturating float-to-int, NaN, infinities, -0.0), enums,
+nested records, constants, pure functions, std.math, `pre`/`post` blocks with
+`if`/`elif`/`else`, plans with `new`, `*`, `otherwise`, `in_state`, `done`,
+`error(c)`, `report`, subordinates commanded with arguments, status fields,
+simulators and `from env` inputs; the scenario sends commands with arguments
+to the root, sets the inputs to edge values and runs a number of cycles.
+
+Heavy arithmetic is put in statements (whose results reach the trace through
+status fields and Global Memory), conditions of rules stay small, so that the
+guard analysis of `rcsc check` stays fast.  A design that still does not check
+clean (a condition that happens to be always false, say) is drawn again from
+the next sub-seed; `Case.attempt` says how many draws it took.
+
+`hostile_literals=True` also writes `if` expressions whose branches are both
+integer constants, which the Rust target leaves untyped where the context
+gives no type (`i32(if c then u32(1) else u32(4294967295))`, `(if c then
+u32(4294967295) else u32(3)) == 2147483648`): a known problem of literal
+typing, left out by default.
+
+`hostile=True` draws names that are reserved words or well-known macros of C
+and Rust, names that collide once joined with `_`, and very long names:
+problems of the targets' naming, found behind that option only.
+"""
+
+from __future__ import annotations
+
+import random
+import re
+from dataclasses import dataclass, field
+
+INT_TYPES = ("i32", "i64", "u32")
+NUM_TYPES = ("i32", "i64", "u32", "f64")
+SCALARS = ("bool", "i32", "i64", "u32", "f64", "duration")
+HEARTBEAT_MS = 10
+INT_LITERAL = re.compile(r"\(?-?(0x[0-9A-Fa-f_]+|[0-9_]+)\)?")
+
+INT_EDGES = {
+    "i32": ["0", "1", "-1", "7", "-7", "3", "2147483647", "-2147483648", "0x7fff_ffff", "1_000", "65536", "46341"],
+    "i64": ["0", "1", "-1", "-7", "9223372036854775807", "-9223372036854775808", "4294967296", "3037000500", "100_000"],
+    "u32": ["0", "1", "7", "4294967295", "2147483648", "0xFFFF_FFFF", "65536", "3"],
+}
+FLOAT_EDGES = ["0.0", "-0.0", "1.0", "-1.0", "0.5", "0.1", "2.5e3", "1e300", "-1e300", "5e-324", "2147483647.5",
+               "-2147483648.9", "4294967295.5", "9.3e18", "-9.3e18", "1e-7", "3.0", "123.456"]
+DURATIONS = ["0 ms", "10 ms", "20 ms", "30 ms", "50 ms", "100 ms", "1 s", "500 us", "1.5 ms", "2 s"]
+
+# std.math functions by result type: (name, parameter types).
+STD_MATH = {
+    "f64": [("clamp", ("f64", "f64", "f64")), ("clamp_abs", ("f64", "f64")), ("sign", ("f64",)),
+            ("signed_square", ("f64",)), ("deadband", ("f64", "f64")), ("dead_zone", ("f64", "f64")),
+            ("safe_div", ("f64", "f64", "f64")), ("percent_of", ("f64", "f64")), ("lerp", ("f64", "f64", "f64")),
+            ("interpolate", ("f64",) * 5), ("interpolate_clamped", ("f64",) * 5),
+            ("ramp_toward", ("f64", "f64", "f64")), ("lowpass", ("f64", "f64", "f64")),
+            ("lowpass_alpha", ("f64", "f64")), ("lag_step", ("f64",) * 4), ("angle_diff_deg", ("f64", "f64")),
+            ("wrap_deg_360", ("f64",))],
+    "i32": [("clamp_i32", ("i32", "i32", "i32")), ("sign_i32", ("i32",))],
+    "i64": [("clamp_i64", ("i64", "i64", "i64"))],
+    "bool": [("in_range", ("f64", "f64", "f64")), ("in_range_i32", ("i32", "i32", "i32")),
+             ("hysteresis", ("f64", "bool", "f64", "f64")), ("approx_eq", ("f64", "f64", "f64")),
+             ("within_pct", ("f64", "f64", "f64"))],
+}
+
+# Names that are fine in the language but reserved, predefined or macros in C
+# or Rust (or in the generated code's own vocabulary).
+HOSTILE_WORDS = [
+    "int", "char", "float", "double", "long", "short", "signed", "unsigned", "static", "extern", "const_", "volatile",
+    "register", "auto", "struct", "union", "typedef", "sizeof", "switch", "case", "default", "goto", "break",
+    "continue", "return", "while", "for", "do", "else_", "enum_", "void", "inline", "restrict", "_Bool", "bool_",
+    "NULL", "EOF", "errno", "stdin", "stdout", "printf", "main", "exit", "abort", "INT32_MAX", "INT32_MIN",
+    "UINT32_MAX", "INT64_MIN", "NAN", "INFINITY", "assert", "isnan", "fabs", "memcpy", "size_t", "int32_t",
+    "uint32_t", "bool_t", "true_", "self", "Self_", "crate", "super", "mod", "impl", "trait", "type", "match", "loop",
+    "move", "mut", "ref", "pub", "use", "where", "async", "await", "dyn", "box", "yield", "unsafe", "let", "fn_",
+    "as", "in", "macro", "priv", "try", "virtual", "final", "override", "abstract", "become", "typeof", "unsized",
+    "Option", "Some", "None", "Ok", "Err", "Result", "Vec", "String", "Default", "Clone", "Copy", "u8", "i8",
+    "usize", "f32", "core", "std", "alloc", "step", "init", "buf", "cmd_", "status_", "gm_", "new_", "state",
+    "ST_NEW", "RULE", "serial", "echo", "rcs", "num", "Externs", "host", "lib", "types", "functions",
+    # the language's own contextual keywords
+    "level", "status", "done", "error", "from", "budget", "verb", "plan", "otherwise", "continuous", "ordered",
+    "report", "reads", "writes", "local", "pre", "post", "then", "elif", "heartbeat", "schedule", "env",
+]
+
+
+@dataclass
+class Case:
+    seed: int
+    design: str
+    scenario: str
+    attempt: int = 0
+    name: str = ""
+
+
+@dataclass
+class Record:
+    name: str
+    fields: list[tuple[str, str]]
+
+
+@dataclass
+class Var:
+    name: str
+    type: str
+
+
+@dataclass
+class Ctrl:
+    name: str
+    level: int
+    simulator: bool = False
+    subs: list["Ctrl"] = field(default_factory=list)
+    verbs: list[tuple[str, list[tuple[str, str]]]] = field(default_factory=list)
+    reports: list[str] = field(default_factory=list)
+    status: list[Var] = field(default_factory=list)
+    locals: list[Var] = field(default_factory=list)
+    writes: list[Var] = field(default_factory=list)
+    reads: list[Var] = field(default_factory=list)
+
+
+class Names:
+    """Fresh names: plain (`in0`, `C1`, ...) or hostile."""
+
+    def __init__(self, rng: random.Random, hostile: bool) -> None:
+        self.rng = rng
+        self.hostile = hostile
+        self.used: set[str] = set()
+        self.counter = 0
+        self.words = list(HOSTILE_WORDS)
+        rng.shuffle(self.words)
+
+    def fresh(self, prefix: str, upper: bool = False) -> str:
+        self.counter += 1
+        if self.hostile and self.rng.random() < 0.6:
+            choice = self.rng.random()
+            if choice < 0.5 and self.words:
+                name = self.words.pop()
+            elif choice < 0.75:
+                # Pieces that collide once joined with `_` by the targets.
+                name = self.rng.choice(["A_B", "A", "B_C", "x_y", "x", "y_z", "MAIN_C", "s_t", "ctrl_A"]) + (
+                    "" if self.rng.random() < 0.5 else "_" + self.rng.choice(["B", "C", "y", "z", "t"]))
+            else:
+                name = (prefix + "_very_long_name_" * self.rng.randint(4, 16))[:250] + str(self.counter)
+            if name not in self.used:
+                self.used.add(name)
+                return name
+        name = f"{prefix}{self.counter}"
+        if upper:
+            name = name.upper()
+        self.used.add(name)
+        return name
+
+
+class DesignGen:
+    """One draw of a design and its scenario from a seed."""
+
+    def __init__(self, seed: int, hostile: bool = False, hostile_literals: bool = False) -> None:
+        self.rng = random.Random(seed)
+        self.hostile_literals = hostile_literals
+        self.seed = seed
+        self.names = Names(self.rng, hostile)
+        self.hostile = hostile
+        self.enums: dict[str, list[str]] = {}
+        self.records: dict[str, Record] = {}
+        self.consts: list[Var] = []
+        self.fns: list[tuple[str, list[tuple[str, str]], str]] = []
+        self.env: list[Var] = []
+        self.gm_out: list[Var] = []
+        self.ctrls: list[Ctrl] = []
+        self.std_math = self.rng.random() < 0.8
+        self.budget = 0  # expression nodes left in the current expression
+
+    # ---- types and values ------------------------------------------------------------
+
+    def rtype(self, allow_record: bool = True, scalar_weight: int = 6) -> str:
+        pool = list(SCALARS) * scalar_weight + list(self.enums) * 2
+        if allow_record:
+            pool += list(self.records) * 2
+        return self.rng.choice(pool)
+
+    def literal(self, t: str) -> str:
+        """A constant expression of type t (literals, constants, constructors)."""
+        r = self.rng
+        if t == "bool":
+            return r.choice(["true", "false"])
+        if t in INT_TYPES:
+            return r.choice(INT_EDGES[t])
+        if t == "f64":
+            return r.choice(FLOAT_EDGES)
+        if t == "duration":
+            return r.choice(DURATIONS)
+        if t in self.enums:
+            return f"{t}.{r.choice(self.enums[t])}"
+        rec = self.records[t]
+        return f"{t}(" + ", ".join(f"{f} = {self.literal(ft)}" for f, ft in rec.fields) + ")"
+
+    def const_value(self, t: str) -> str:
+        """A constant's value: a literal, or an edge computed at compile time."""
+        r = self.rng
+        if t == "f64" and r.random() < 0.5:
+            return r.choice(["0.0 / 0.0", "1.0 / 0.0", "-1.0 / 0.0", "-0.0", "1e308 * 10.0", "-(0.0 / 0.0)"])
+        if t == "i32" and r.random() < 0.3:
+            return r.choice(["2147483647 + 1", "-2147483648 / -1", "7 / 0", "-7 % 0", "-2147483648 % -1", "i32(1e12)",
+                             "i32(0.0 / 0.0)", "-7 / 2", "-7 % 2"])
+        if t == "u32" and r.random() < 0.3:
+            return r.choice(["u32(0) - 1", "u32(-1.5)", "u32(1e20)", "4294967295 * 2"])
+        if t == "i64" and r.random() < 0.3:
+            return r.choice(["i64(-1e300)", "9223372036854775807 + 1", "i64(2147483647) * 3"])
+        return self.literal(t)
+
+    # ---- expressions ----------------------------------------------------------------
+
+    def leaf(self, t: str, scope: list[Var], anch: bool = True) -> str:
+        """A variable, a field, a constant or a literal of type t.
+
+        `anch` says whether the context gives the expression its type (an
+        assignment, an argument, the right operand of a comparison); where it
+        does not, an integer literal of another type than i32 is wrapped in a
+        conversion, as a person would have to write it.
+        """
+        r = self.rng
+        vars_ = [v.name for v in scope if v.type == t]
+        for v in scope:  # fields of records, nested ones too
+            if v.type in self.records:
+                for f, ft in self.records[v.type].fields:
+                    if ft == t:
+                        vars_.append(f"{v.name}.{f}")
+                    elif ft in self.records:
+                        vars_ += [f"{v.name}.{f}.{g}" for g, gt in self.records[ft].fields if gt == t]
+        consts = [c.name for c in self.consts if c.type == t]
+        choice = r.random()
+        if vars_ and choice < 0.7:
+            return r.choice(vars_)
+        if consts and choice < 0.85:
+            return r.choice(consts)
+        lit = self.literal(t)
+        if t in INT_TYPES and not anch and t != "i32":
+            return f"{t}({lit})"
+        return f"({lit})" if lit.startswith("-") else lit
+
+    def expr(self, t: str, scope: list[Var], depth: int = 3, anch: bool = True) -> str:
+        r = self.rng
+        self.budget -= 1
+        if depth <= 0 or self.budget <= 0 or r.random() < 0.25:
+            return self.leaf(t, scope, anch)
+        d = depth - 1
+        if t in NUM_TYPES:
+            k = r.random()
+            if k < 0.35:
+                ops = ["+", "-", "*", "/"] + (["%"] if t != "f64" else [])
+                op = r.choice(ops)
+                return f"({self.expr(t, scope, d, anch)} {op} {self.expr(t, scope, d, anch)})"
+            if k < 0.45:
+                operand = self.expr(t, scope, d, anch)
+                if t == "u32" and INT_LITERAL.fullmatch(operand):
+                    operand = f"u32({operand})"  # `-4294967295` is a u32 literal out of range
+                return f"(-{operand})"
+            if k < 0.6:
+                src = r.choice([x for x in NUM_TYPES if x != t] + [t])
+                inner = self.expr(src, scope, d, False)
+                if inner.startswith("(if ") and not self.hostile_literals:
+                    # An `if` of two integer constants under a conversion is
+                    # mistyped by the Rust target (see --hostile-literals).
+                    inner = self.leaf(src, scope, False)
+                return f"{t}({inner})"
+            if k < 0.7:
+                f = r.choice(["abs", "min", "max"])
+                if f == "abs":
+                    return f"abs({self.expr(t, scope, d, anch)})"
+                return f"{f}({self.expr(t, scope, d, anch)}, {self.expr(t, scope, d, anch)})"
+            if k < 0.78:
+                then = self.expr(t, scope, d, anch)
+                if t in INT_TYPES and not self.hostile_literals:
+                    then = self.nonconst(t, scope) or then
+                return f"(if {self.cond(scope, d)} then {then} else {self.expr(t, scope, d, anch)})"
+            if k < 0.86 and t == "f64":
+                return f"seconds({self.expr('duration', scope, d)})"
+            if k < 0.93:
+                call = self.call(t, scope, d)
+                if call:
+                    return call
+            return self.leaf(t, scope, anch)
+        if t == "bool":
+            return self.cond(scope, depth)
+        if t == "duration":
+            k = r.random()
+            if k < 0.3:
+                return f"({self.expr(t, scope, d)} {r.choice(['+', '-'])} {self.expr(t, scope, d)})"
+            if k < 0.4:
+                return f"(-{self.expr(t, scope, d)})"
+            if k < 0.55:
+                f = r.choice(["abs", "min", "max"])
+                if f == "abs":
+                    return f"abs({self.expr(t, scope, d)})"
+                return f"{f}({self.expr(t, scope, d)}, {self.expr(t, scope, d)})"
+            if k < 0.65:
+                return f"(if {self.cond(scope, d)} then {self.expr(t, scope, d)} else {self.expr(t, scope, d)})"
+            return self.leaf(t, scope)
+        # enums and records
+        k = r.random()
+        if k < 0.2:
+            return f"(if {self.cond(scope, d)} then {self.expr(t, scope, d)} else {self.expr(t, scope, d)})"
+        if k < 0.35:
+            call = self.call(t, scope, d)
+            if call:
+                return call
+        if t in self.records and k < 0.6:
+            rec = self.records[t]
+            return f"{t}(" + ", ".join(f"{f} = {self.expr(ft, scope, d)}" for f, ft in rec.fields) + ")"
+        return self.leaf(t, scope)
+
+    def nonconst(self, t: str, scope: list[Var]) -> str | None:
+        """A value of integer type t that the checker cannot fold: a variable, or a
+        conversion of one.  An `if` with such a branch has a type in the Rust
+        target even where its context gives none (see --hostile-literals)."""
+        same = [v.name for v in scope if v.type == t]
+        if same:
+            return self.rng.choice(same)
+        nums = [v.name for v in scope if v.type in NUM_TYPES]
+        return f"{t}({self.rng.choice(nums)})" if nums else None
+
+    def call(self, t: str, scope: list[Var], depth: int) -> str | None:
+        cands = [(n, [pt for _, pt in ps]) for n, ps, rt in self.fns if rt == t]
+        if self.std_math:
+            cands += [(n, list(ps)) for n, ps in STD_MATH.get(t, [])]
+        if not cands:
+            return None
+        name, params = self.rng.choice(cands)
+        return f"{name}(" + ", ".join(self.expr(pt, scope, depth) for pt in params) + ")"
+
+    def cond(self, scope: list[Var], depth: int = 2) -> str:
+        r = self.rng
+        self.budget -= 1
+        d = depth - 1
+        k = r.random()
+        if depth <= 0 or self.budget <= 0 or k < 0.45:
+            t = r.choice(list(NUM_TYPES) + ["duration", "bool"] + list(self.enums))
+            op = r.choice(["==", "!="] if t in self.enums or t == "bool" else ["==", "!=", "<", "<=", ">", ">="])
+            left = self.leaf(t, scope, anch=False)
+            right = self.leaf(t, scope) if depth <= 0 or self.budget <= 0 else self.expr(t, scope, min(d, 1))
+            return f"({left} {op} {right})"
+        if k < 0.6:
+            return f"({self.cond(scope, d)} {r.choice(['and', 'or'])} {self.cond(scope, d)})"
+        if k < 0.7:
+            return f"(not {self.cond(scope, d)})"
+        if k < 0.8:
+            call = self.call("bool", scope, d)
+            if call:
+                return call
+        t = r.choice(NUM_TYPES)
+        return f"({self.expr(t, scope, d, False)} {r.choice(['<', '>=', '==', '!='])} {self.expr(t, scope, d)})"
+
+    def guard(self, scope: list[Var], ctrl: Ctrl, in_plan: bool) -> str:
+        """A small rule condition: what the guard analysis can decide quickly.
+
+        `in_plan` is false for the rules of `new`, which must not wait on a
+        subordinate (its error is only tested by the `*` rules after them).
+        """
+        r = self.rng
+        opts = []
+        for s in ctrl.subs if in_plan else []:
+            opts += [f"{s.name}.done", f"{s.name}.executing", f"(not {s.name}.executing)"]
+            opts += [f"{s.name}.{rep}" for rep in s.reports]
+            opts += [f"({s.name}.{v.name} {'==' if v.type in self.enums or v.type == 'bool' else '>='} {self.literal(v.type) if v.type != 'f64' else '0.5'})"
+                     for v in s.status if v.type in SCALARS[:5] or v.type in self.enums]
+            opts.append(f"({s.name}.age >= 20 ms)")
+            opts.append(f"({s.name}.error_code != 0)")
+        if in_plan:
+            opts += [f"(in_state >= {r.choice([10, 20, 30, 50])} ms)", f"(in_state < {r.choice([20, 40])} ms)"]
+        ints = [v for v in scope if v.type in ("i32", "bool", "duration", "f64") or v.type in self.enums]
+        for v in ints:
+            if v.type == "bool":
+                opts.append(v.name)
+            elif v.type in self.enums:
+                opts.append(f"({v.name} == {self.literal(v.type)})")
+            elif v.type == "duration":
+                opts.append(f"({v.name} > {r.choice(DURATIONS)})")
+            else:
+                lit = self.literal(v.type)
+                opts.append(f"({v.name} {r.choice(['<', '>=', '==', '!='])} {'(' + lit + ')' if lit.startswith('-') else lit})")
+        if not opts:
+            return "(in_state >= 20 ms)" if in_plan else "true"
+        g = r.choice(opts)
+        if r.random() < 0.3:
+            g = f"({g} {r.choice(['and', 'or'])} {r.choice(opts)})"
+        elif r.random() < 0.15:
+            g = f"(not {g})"
+        return g
+
+    # ---- statements -----------------------------------------------------------------
+
+    def lvalues(self, targets: list[Var]) -> list[tuple[str, str]]:
+        """Assignable places: variables and their record fields."""
+        out = [(v.name, v.type) for v in targets]
+        for v in targets:
+            if v.type in self.records:
+                for f, ft in self.records[v.type].fields:
+                    out.append((f"{v.name}.{f}", ft))
+                    if ft in self.records:
+                        out += [(f"{v.name}.{f}.{g}", gt) for g, gt in self.records[ft].fields]
+        return out
+
+    def assign(self, targets: list[Var], scope: list[Var]) -> str:
+        r = self.rng
+        name, t = r.choice(self.lvalues(targets))
+        self.budget = 14
+        ops = ["="]
+        if t in NUM_TYPES:
+            ops += ["+=", "-=", "*="]
+        elif t == "duration":
+            ops += ["+=", "-="]
+        return f"{name} {r.choice(ops)} {self.expr(t, scope, 4)}"
+
+    def block(self, targets: list[Var], scope: list[Var], indent: str, n: int, depth: int = 2) -> list[str]:
+        r = self.rng
+        lines = []
+        for _ in range(n):
+            if depth > 0 and r.random() < 0.2:
+                self.budget = 6
+                lines.append(f"{indent}if {self.cond(scope, 2)} {{")
+                lines += self.block(targets, scope, indent + "    ", r.randint(1, 2), depth - 1)
+                for _ in range(r.randint(0, 1)):
+                    self.budget = 6
+                    lines.append(f"{indent}}} elif {self.cond(scope, 2)} {{")
+                    lines += self.block(targets, scope, indent + "    ", 1, depth - 1)
+                if r.random() < 0.5:
+                    lines.append(f"{indent}}} else {{")
+                    lines += self.block(targets, scope, indent + "    ", r.randint(1, 2), depth - 1)
+                lines.append(f"{indent}}}")
+            else:
+                lines.append(f"{indent}{self.assign(targets, scope)};")
+        return lines
+
+    # ---- declarations ---------------------------------------------------------------
+
+    def declare(self) -> None:
+        r = self.rng
+        n = self.names
+        for _ in range(r.randint(0, 2)):
+            self.enums[n.fresh("En")] = [n.fresh("M", upper=True) for _ in range(r.randint(1, 4))]
+        for _ in range(r.randint(0, 2)):
+            fields = []
+            for _ in range(r.randint(1, 3)):
+                fields.append((n.fresh("f"), self.rtype(allow_record=True)))
+            name = n.fresh("Rec")
+            self.records[name] = Record(name, fields)  # earlier records only: no recursion
+        for _ in range(r.randint(1, 5)):
+            self.consts.append(Var(n.fresh("K", upper=True), self.rtype()))
+        for _ in range(r.randint(0, 3)):
+            params = [(n.fresh("a"), self.rtype()) for _ in range(r.randint(1, 3))]
+            self.fns.append((n.fresh("fun"), params, self.rtype(scalar_weight=10)))
+        for _ in range(r.randint(1, 5)):
+            self.env.append(Var(n.fresh("in"), self.rtype(scalar_weight=8)))
+        if not any(v.type in NUM_TYPES for v in self.env):
+            self.env.append(Var(n.fresh("in"), r.choice(NUM_TYPES)))
+
+    def hierarchy(self) -> None:
+        r = self.rng
+        n = self.names
+        count = r.randint(1, 4)
+        root = Ctrl(n.fresh("C", upper=True), level=count + 1)
+        self.ctrls = [root]
+        for _ in range(count - 1):
+            parent = r.choice([c for c in self.ctrls if c.level > 1])
+            child = Ctrl(n.fresh("C", upper=True), level=parent.level - 1)
+            parent.subs.append(child)
+            self.ctrls.append(child)
+        if r.random() < 0.5:
+            self.ctrls.append(Ctrl(n.fresh("SIM", upper=True), level=0, simulator=True))
+        for c in self.ctrls:
+            for _ in range(r.randint(0, 3)):
+                c.status.append(Var(n.fresh("st"), self.rtype()))
+            for _ in range(r.randint(0, 2)):
+                c.locals.append(Var(n.fresh("loc"), self.rtype()))
+            for _ in range(r.randint(0 if c.status else 1, 2)):
+                v = Var(n.fresh("out"), self.rtype())
+                c.writes.append(v)
+                self.gm_out.append(v)
+            if not c.simulator:
+                for _ in range(r.randint(1, 2)):
+                    params = [(n.fresh("p"), self.rtype()) for _ in range(r.randint(0, 2))]
+                    c.verbs.append((n.fresh("V", upper=True), params))
+                c.reports = [n.fresh("REP", upper=True) for _ in range(r.randint(0, 2))]
+        for c in self.ctrls:
+            pool = self.env + [v for v in self.gm_out if v not in c.writes]
+            c.reads = r.sample(pool, min(len(pool), r.randint(1, 4)))
+
+    def function(self, name: str, params: list[tuple[str, str]], ret: str, index: int) -> str:
+        # A function calls only functions declared before it: no recursion.
+        saved = self.fns
+        self.fns = self.fns[:index]
+        self.budget = 10
+        body = self.expr(ret, [Var(p, t) for p, t in params], 3)
+        self.fns = saved
+        return f"fn {name}(" + ", ".join(f"{p}: {t}" for p, t in params) + f") -> {ret} =\n    {body}"
+
+    # ---- plans ----------------------------------------------------------------------
+
+    def jobs(self, c: Ctrl, targets: list[Var], scope: list[Var], states_left: bool) -> str:
+        r = self.rng
+        out = []
+        for _ in range(r.randint(0, 2)):
+            out.append(self.assign(targets, scope))
+        for s in c.subs:
+            if r.random() < 0.5:
+                verb, params = r.choice(s.verbs)
+                self.budget = 8
+                args = [self.expr(t, scope, 2) for _, t in params]
+                if params and r.random() < 0.5:
+                    args = [f"{p} = {a}" for (p, _), a in zip(params, args)]
+                out.append(f"{s.name}.{verb}({', '.join(args)})")
+        if c.reports and r.random() < 0.4:
+            out.append(f"report {r.choice(c.reports)}")
+        r.shuffle(out)
+        return ", ".join(out)
+
+    def plan(self, c: Ctrl, verb: str, params: list[tuple[str, str]], scope: list[Var], targets: list[Var]) -> list[str]:
+        r = self.rng
+        n = self.names
+        scope = scope + [Var(f"cmd.{p}", t) for p, t in params]
+        states = [n.fresh("S", upper=True) for _ in range(r.randint(0, 3))]
+        continuous = bool(states) and r.random() < 0.2
+        mods = (" continuous" if continuous else "") + (" ordered" if r.random() < 0.5 else "")
+        labels = iter(f"R{i}" for i in range(100))
+        rules = []
+
+        def rule(cond: str, state: str, nxt: str) -> None:
+            self.budget = 6
+            jobs = self.jobs(c, targets, scope, bool(states))
+            rules.append(f"        {next(labels)}: {cond} | {state} -> {nxt}" + (f" | {jobs};" if jobs else ";"))
+
+        def end() -> str:
+            return r.choice(["done", f"error({r.randint(1, 99)})", "done"])
+
+        first = states[0] if states else end()
+        k = r.random()
+        if k < 0.4:
+            rule("true", "new", first)
+        else:
+            g = self.guard(scope, c, False)
+            if g == "true":
+                rule("true", "new", first)
+            else:
+                rule(g, "new", first)
+                other = r.choice(states + ["done", "error(5)"])
+                rule("otherwise" if k < 0.7 else f"not {g}", "new", other)
+        if states:
+            for s in c.subs:
+                rule(f"{s.name}.error", "*", f"error({r.randint(1, 99)})")
+        for i, st in enumerate(states):
+            targets_ = states + ["*", "done", f"error({r.randint(1, 99)})"]
+            for _ in range(r.randint(0, 2)):
+                rule(self.guard(scope, c, True), st, r.choice(targets_))
+            if i + 1 < len(states):
+                rule(self.guard(scope, c, True), st, states[i + 1])
+            if r.random() < 0.3:
+                rule("otherwise", st, r.choice(targets_ + [end()]))
+            else:
+                rule(f"in_state >= {r.choice([20, 30, 50, 100])} ms", st, end())
+        return [f"    plan {verb}{mods} {{", *rules, "    }"]
+
+    # ---- the design -----------------------------------------------------------------
+
+    def design(self, name: str) -> str:
+        r = self.rng
+        self.declare()
+        self.hierarchy()
+        out = [f"// generated by bench/difftest_gen.py, seed {self.seed}", f"design {name}", ""]
+        if self.std_math:
+            out += ["import std.math", ""]
+        for e, members in self.enums.items():
+            out.append(f"enum {e} {{ {', '.join(members)} }}")
+        for rec in self.records.values():
+            out.append(f"record {rec.name} {{ " + ", ".join(f"{f}: {t}" for f, t in rec.fields) + " }")
+        for cst in self.consts:
+            out.append(f"const {cst.name}: {cst.type} = {self.const_value(cst.type)}")
+        for i, (fname, params, ret) in enumerate(self.fns):
+            out.append(self.function(fname, params, ret, i))
+        for v in self.env:
+            out.append(f"gm {v.name}: {v.type} = {self.literal(v.type)} from env")
+        for v in self.gm_out:
+            out.append(f"gm {v.name}: {v.type} = {self.literal(v.type)}")
+        out.append("")
+        for c in self.ctrls:
+            kind = "simulator" if c.simulator else "controller"
+            out.append(f"{kind} {c.name} level {c.level} budget 100 us {{")
+            if c.subs:
+                out.append(f"    subordinates {', '.join(s.name for s in c.subs)}")
+            if c.reads:
+                out.append(f"    reads {', '.join(v.name for v in c.reads)}")
+            if c.writes:
+                out.append(f"    writes {', '.join(v.name for v in c.writes)}")
+            for verb, params in c.verbs:
+                out.append(f"    verb {verb}" + (f"({', '.join(f'{p}: {t}' for p, t in params)})" if params else ""))
+            if c.reports:
+                out.append(f"    reports {', '.join(c.reports)}")
+            for v in c.status:
+                out.append(f"    status {v.name}: {v.type} = {self.literal(v.type)}")
+            for v in c.locals:
+                out.append(f"    local {v.name}: {v.type} = {self.literal(v.type)}")
+            targets = c.status + c.locals + c.writes
+            scope = c.reads + targets
+            for s in c.subs:  # the supervisor's view of a subordinate's status fields
+                scope = scope + [Var(f"{s.name}.{v.name}", v.type) for v in s.status]
+            for block in ("pre", "post"):
+                if r.random() < 0.8:
+                    out.append(f"    {block} {{")
+                    out += self.block(targets, scope, "        ", r.randint(1, 4))
+                    out.append("    }")
+            for verb, params in c.verbs:
+                out += self.plan(c, verb, params, scope, targets)
+            out.append("}")
+            out.append("")
+        order = list(self.ctrls)
+        if r.random() < 0.7:
+            order.sort(key=lambda c: -c.level)  # simulators last, supervisors first
+        else:
+            r.shuffle(order)
+        out += ["cpu MAIN {", f"    heartbeat {HEARTBEAT_MS} ms", f"    schedule {', '.join(c.name for c in order)}", "}", ""]
+        return "\n".join(out)
+
+    def scenario(self) -> str:
+        r = self.rng
+        cycles = r.randint(10, 60)
+        lines = [f'scenario "seed {self.seed}"', f"cycles {cycles}"]
+        root = self.ctrls[0]
+        events = []
+        for _ in range(r.randint(1, 6)):
+            verb, params = r.choice(root.verbs)
+            args = [self.literal(t) for _, t in params]
+            if params and r.random() < 0.5:
+                args = [f"{p} = {a}" for (p, _), a in zip(params, args)]
+            events.append((r.randint(1, cycles), f"{root.name}.{verb}({', '.join(args)})"))
+        for _ in range(r.randint(0, 10)):
+            v = r.choice(self.env)
+            cand = [c.name for c in self.consts if c.type == v.type]
+            value = r.choice(cand) if cand and r.random() < 0.3 else self.literal(v.type)
+            events.append((r.randint(1, cycles), f"{v.name} = {value}"))
+        events.sort(key=lambda e: e[0])
+        lines += [f"at {t}: {text}" for t, text in events]
+        return "\n".join(lines) + "\n"
+
+
+def draw(seed: int, attempt: int, hostile: bool = False, hostile_literals: bool = False) -> Case:
+    """One draw, not checked."""
+    gen = DesignGen(seed * 1000 + attempt, hostile, hostile_literals)
+    name = f"d{seed}"
+    design = gen.design(name)
+    return Case(seed, design, gen.scenario(), attempt, name)
+
+
+def generate(seed: int, hostile: bool = False, max_attempts: int = 50, hostile_literals: bool = False) -> Case:
+    """The first draw of `seed` whose design checks without errors and whose scenario loads.
+
+    Random conditions often hide a later rule behind an earlier one (E0506);
+    such rules are deleted and the design checked again, a few times, before
+    the next draw is taken.
+    """
+    for attempt in range(max_attempts):
+        case = draw(seed, attempt, hostile, hostile_literals)
+        for _ in range(4):
+            errors, dead = check_case(case)
+            if not errors:
+                return case
+            if not dead or len(dead) != len(errors):
+                break
+            lines = case.design.split("\n")
+            case.design = "\n".join(x for i, x in enumerate(lines, 1) if i not in dead)
+    raise RuntimeError(f"seed {seed}: no valid design in {max_attempts} draws")
+
+
+def check_case(case: Case) -> tuple[list[str], set[int]]:
+    """The errors of `rcsc check` on the design and of loading its scenario
+    (none: clean), and the lines of the rules that can never fire (E0506)."""
+    import tempfile
+    from pathlib import Path
+
+    from rcsc.diagnostics import Diagnostics
+    from rcsc.driver import check_path
+    from rcsc.scenario import text_to_scenario
+    from rcsc.source import SourceFile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / f"{case.name}.rcs"
+        path.write_text(case.design, encoding="utf-8")
+        result = check_path(str(path))
+        errors = [f"{d.code}: {d.message}" for d in result.diags.errors]
+        dead = {d.span.line for d in result.diags.errors if d.code in ("E0506", "E0513") and d.span is not None}
+        if errors or result.model is None:
+            return errors or ["no model"], dead
+        diags = Diagnostics()
+        sc = text_to_scenario(SourceFile("s.scn", case.scenario), result.model, diags)
+        errors = [f"{d.code}: {d.message}" for d in diags.errors]
+        if sc is None and not errors:
+            errors = ["scenario did not load"]
+        return errors, set()

@@ -1,0 +1,267 @@
+"""The harness of the differential tester: one generated case through every build, traces compared.
+
+For a batch of `Case`s (bench/difftest_gen.py) it runs the reference
+simulator in process, builds the C target with gcc -O0, gcc -O2, clang -O2
+and clang with AddressSanitizer and UndefinedBehaviorSanitizer (one compiler
+invocation per build, the project's strict warning flags), and the Rust
+target as one cargo workspace for the whole batch (debug, release and
+`cargo clippy -- -D warnings`, one shared target folder), runs every Main
+Program on the case's scenario and compares its trace with the simulator's
+byte for byte.  Every difference, every compiler or clippy message, every
+exit code other than 0 and every line a program prints on stderr (a sanitizer
+report) is a `Finding`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import os
+import re
+import subprocess
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from difftest_gen import Case
+
+STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wshadow", "-Werror", "-ffp-contract=off"]
+C_CONFIGS = {
+    "gcc-O0": ("gcc", ["-O0"]),
+    "gcc-O2": ("gcc", ["-O2"]),
+    "clang-O2": ("clang", ["-O2"]),
+    "clang-asan-ubsan": ("clang", ["-O1", "-g", "-fsanitize=address,undefined", "-fno-sanitize-recover=all",
+                                   "-fno-omit-frame-pointer"]),
+}
+RUST_CONFIGS = ("rust-debug", "rust-release")
+# Cargo's own note that the members' [profile] tables are not read in a
+# workspace: the workspace root carries the same tables (checked below).
+_PROFILE_NOTE = re.compile(r"^warning: profiles for the non root package will be ignored.*\n(^(package|workspace):.*\n)*", re.M)
+
+
+_INFRA = re.compile(r"failed to run `rustc` to learn about target-specific information")
+
+
+@dataclass
+class Finding:
+    seed: int
+    kind: str  # "disagree", "warning", "fail", "crash", "invalid"
+    where: str  # the build configuration (or "rcsc")
+    detail: str
+
+    def line(self) -> str:
+        first = self.detail.strip().splitlines()[0] if self.detail.strip() else ""
+        return f"seed {self.seed}: {self.kind} in {self.where}: {first[:200]}"
+
+
+@dataclass
+class Prepared:
+    case: Case
+    folder: Path
+    design: Path
+    scenario: Path
+    reference: bytes = b""
+    findings: list[Finding] = field(default_factory=list)
+
+
+def _rcsc(argv: list[str]) -> tuple[int, str]:
+    from rcsc import cli
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        rc = cli.main(argv)
+    return rc, err.getvalue()
+
+
+def prepare(case: Case, base: Path) -> Prepared:
+    """Write the case, check it and run the reference simulator."""
+    from rcsc.diagnostics import Diagnostics
+    from rcsc.driver import check_path
+    from rcsc.runner import run_scenario
+    from rcsc.scenario import text_to_scenario
+    from rcsc.source import SourceFile
+    from rcsc.trace import to_jsonl
+
+    folder = base / case.name
+    folder.mkdir(parents=True, exist_ok=True)
+    design = folder / f"{case.name}.rcs"
+    design.write_text(case.design, encoding="utf-8")
+    scn = folder / f"{case.name}.scn"
+    scn.write_text(case.scenario, encoding="utf-8")
+    p = Prepared(case, folder, design, scn)
+    result = check_path(str(design))
+    if not result.ok or result.model is None:
+        p.findings.append(Finding(case.seed, "invalid", "rcsc", "\n".join(d.message for d in result.diags.errors)))
+        return p
+    diags = Diagnostics()
+    sc = text_to_scenario(SourceFile(str(scn), case.scenario), result.model, diags)
+    if sc is None or diags.has_errors():
+        p.findings.append(Finding(case.seed, "invalid", "rcsc", "\n".join(d.message for d in diags.errors)))
+        return p
+    try:
+        run = run_scenario(result.model, sc)
+        p.reference = to_jsonl(result.model, run.snapshots).encode("utf-8")
+    except Exception as exc:  # a crash of the simulator is a finding, not the end of the run
+        p.findings.append(Finding(case.seed, "crash", "rcsc sim", f"{type(exc).__name__}: {exc}"))
+    return p
+
+
+def first_difference(ref: bytes, got: bytes) -> str:
+    a, b = ref.decode(errors="replace").splitlines(), got.decode(errors="replace").splitlines()
+    for i, (x, y) in enumerate(zip(a, b), 1):
+        if x != y:
+            return f"cycle {i} differs:\n  sim:      {x}\n  compiled: {y}"
+    return f"lengths differ: sim {len(a)} lines, compiled {len(b)} lines"
+
+
+def run_program(p: Prepared, exe: Path, where: str) -> list[Finding]:
+    trace = exe.with_suffix(".jsonl")
+    env = dict(os.environ, ASAN_OPTIONS="detect_leaks=1", UBSAN_OPTIONS="print_stacktrace=1")
+    try:
+        proc = subprocess.run([str(exe), "--fast", "--no-console", "--no-timing", "--scenario", str(p.scenario),
+                               "--trace", str(trace)], capture_output=True, text=True, timeout=120, env=env,
+                              stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired:
+        return [Finding(p.case.seed, "fail", where, "timed out after 120 s")]
+    out = []
+    if proc.returncode != 0 or proc.stderr:
+        out.append(Finding(p.case.seed, "fail", where, f"exit {proc.returncode}\n{proc.stderr[-3000:]}"))
+    got = trace.read_bytes() if trace.exists() else b""
+    if got != p.reference:
+        out.append(Finding(p.case.seed, "disagree", where, first_difference(p.reference, got)))
+    return out
+
+
+def c_generate(p: Prepared) -> list[Finding]:
+    """`rcsc build --target c` of one case (in the main thread: it redirects stderr)."""
+    rc, err = _rcsc(["build", str(p.design), "--target", "c", "-o", str(p.folder / "c")])
+    return [] if rc == 0 else [Finding(p.case.seed, "crash", "rcsc build c", err[-3000:])]
+
+
+def c_case(p: Prepared, configs: list[str]) -> list[Finding]:
+    """Build each C configuration of a generated case and run it."""
+    src = p.folder / "c"
+    out = []
+    sources = sorted(str(s) for s in src.glob("*.c"))
+    for config in configs:
+        cc, flags = C_CONFIGS[config]
+        exe = p.folder / f"{config}.bin"
+        proc = subprocess.run([cc, *STRICT, *flags, "-I", str(src), "-o", str(exe), *sources, "-lm"],
+                              capture_output=True, text=True)
+        if proc.returncode != 0 or proc.stderr:
+            kind = "warning" if proc.returncode == 0 or "-Werror" in proc.stderr or "error: " in proc.stderr else "fail"
+            out.append(Finding(p.case.seed, kind, config, proc.stderr[-4000:]))
+            continue
+        out += run_program(p, exe, config)
+    return out
+
+
+def _profiles(toml: str) -> str:
+    return toml[toml.index("[profile."):] if "[profile." in toml else ""
+
+
+def rust_generate(prepared: list[Prepared], base: Path) -> tuple[list[Prepared], list[Finding]]:
+    """Generate every case's crate into one cargo workspace (in the main thread)."""
+    ws = base / "rust-ws"
+    ws.mkdir(parents=True, exist_ok=True)
+    members: dict[str, Prepared] = {}
+    out: list[Finding] = []
+    profiles = None
+    for p in prepared:
+        crate = ws / p.case.name
+        rc, err = _rcsc(["build", str(p.design), "--target", "rust", "-o", str(crate)])
+        if rc != 0:
+            out.append(Finding(p.case.seed, "crash", "rcsc build rust", err[-3000:]))
+            continue
+        prof = _profiles((crate / "Cargo.toml").read_text(encoding="utf-8"))
+        if profiles is not None and prof != profiles:
+            raise RuntimeError("generated crates differ in their [profile] tables; the workspace cannot share them")
+        profiles = prof
+        members[p.case.name] = p
+    (ws / "Cargo.toml").write_text(
+        "[workspace]\nresolver = \"2\"\nmembers = [" + ", ".join(f'"{m}"' for m in sorted(members)) + "]\n\n" + (profiles or ""),
+        encoding="utf-8")
+    return list(members.values()), out
+
+
+RUST_STEPS = {"rust-debug": ["build"], "rust-release": ["build", "--release"], "clippy": ["clippy", "--all-targets"]}
+
+
+def rust_batch(prepared: list[Prepared], base: Path, jobs: int, steps: tuple[str, ...] = tuple(RUST_STEPS)) -> list[Finding]:
+    """Build the workspace in debug and release and run clippy on it (one target
+    folder), then run the programs."""
+    ws = base / "rust-ws"
+    members = {p.case.name: p for p in prepared}
+    out: list[Finding] = []
+    env = dict(os.environ, CARGO_TARGET_DIR=str(base / "cargo-target"), CARGO_TERM_COLOR="never")
+    failed: set[str] = set()
+    for what in steps:
+        cmd = RUST_STEPS[what]
+        argv = ["cargo", *cmd, "--offline", "--workspace", "--keep-going", "-j", str(jobs), "--message-format=json"]
+        if what == "clippy":
+            argv += ["--", "-D", "warnings"]
+        proc = subprocess.run(argv, cwd=ws, env=env, capture_output=True, text=True)
+        if _INFRA.search(proc.stderr):
+            # cargo could not start rustc at all (seen on a loaded machine):
+            # not a finding about the code; the step is run again once.
+            proc = subprocess.run(argv, cwd=ws, env=env, capture_output=True, text=True)
+        for line in proc.stdout.splitlines():
+            msg = json.loads(line)
+            if msg.get("reason") != "compiler-message":
+                continue
+            src = Path(msg.get("target", {}).get("src_path", ""))
+            name = src.relative_to(ws).parts[0] if src.is_relative_to(ws) else ""
+            diag = msg["message"]
+            if diag.get("level") in ("warning", "error") and not diag["message"].startswith("aborting due to"):
+                if diag["level"] == "error":
+                    failed.add(name)
+                seed = members[name].case.seed if name in members else -1
+                out.append(Finding(seed, "warning", what, diag.get("rendered") or diag["message"]))
+        stderr = _PROFILE_NOTE.sub("", proc.stderr)
+        noise = [x for x in stderr.splitlines() if re.match(r"^(warning|error)", x) and "build failed" not in x
+                 and "could not compile" not in x and "generated" not in x]
+        if noise:
+            out.append(Finding(-1, "warning", what, "\n".join(noise) + "\n" + stderr[-3000:]))
+    for name, p in members.items():
+        if name in failed:
+            continue
+        for config, profile in (("rust-debug", "debug"), ("rust-release", "release")):
+            if config not in steps:
+                continue
+            exe = base / "cargo-target" / profile / f"{name}_MAIN"
+            if exe.exists():
+                out += run_program(p, exe, config)
+            else:
+                out.append(Finding(p.case.seed, "fail", config, "no program was built"))
+    return out
+
+
+def run_batch(cases: list[Case], targets: list[str], jobs: int = 1, c_configs: list[str] | None = None,
+              workdir: Path | None = None, rust_steps: tuple[str, ...] = tuple(RUST_STEPS)) -> list[Finding]:
+    """Every case of the batch through every build; the findings."""
+    configs = list(c_configs or C_CONFIGS)
+    with tempfile.TemporaryDirectory(prefix="difftest-") as tmp:
+        base = workdir or Path(tmp)
+        prepared = [prepare(c, base) for c in cases]
+        findings = [f for p in prepared for f in p.findings]
+        good = [p for p in prepared if not p.findings]
+        c_ready = []
+        if "c" in targets:
+            for p in good:
+                got = c_generate(p)
+                findings += got
+                if not got:
+                    c_ready.append(p)
+        rust_ready = []
+        if "rust" in targets and good:
+            rust_ready, got = rust_generate(good, base)
+            findings += got
+        with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+            futures = [pool.submit(c_case, p, configs) for p in c_ready]
+            if rust_ready:
+                findings += rust_batch(rust_ready, base, jobs, rust_steps)
+            for fut in futures:
+                findings += fut.result()
+    return findings
