@@ -101,6 +101,17 @@ def test_slice_agrees_everywhere(tmp_path: Path) -> None:
     assert findings == [], "\n\n".join(f"{f.line()}\n{f.detail}" for f in findings)
 
 
+# Hostile names and literals: seeds 1-4 once built invalid C (a buffer member
+# of a wrapped controller name started with a digit), 2 a 250-character name.
+HOSTILE_SLICE = [1, 2, 3, 4]
+
+
+def test_hostile_slice_agrees_everywhere(tmp_path: Path) -> None:
+    cases = [generate(s, hostile=True, hostile_literals=True) for s in HOSTILE_SLICE]
+    findings = run_batch(cases, ["c", "rust"], jobs=2, workdir=tmp_path)
+    assert findings == [], "\n\n".join(f"{f.line()}\n{f.detail}" for f in findings)
+
+
 def test_hostile_literals_only_behind_the_option() -> None:
     """`i32(if c then u32(1) else u32(4294967295))`: the Rust target mistypes the
     constants of such an `if`; the default generator leaves it out."""

@@ -416,3 +416,14 @@ def test_a_member_named_like_a_design_wide_name_stays_apart() -> None:
     n = CNames("MAIN", controllers=["PERIOD_NS"], cpus=["A"])
     assert n.member("MAIN_PERIOD_NS") != n.ctrl_type("PERIOD_NS")
     assert n.member("MAIN_PERIOD_NS").startswith("_0")
+
+
+def test_c_buffer_members_are_identifiers() -> None:
+    """A wrapped controller fragment starts with a digit; its buffer members may not."""
+    from rcsc.backends.c.naming import CNames
+
+    names = ["_x", "__", "x_", "C_very_long_name__" * 8, "A"]
+    n = CNames("d", controllers=names, cpus=["A"])
+    members = [n.buffer_member(c, t) for c in names for t in ("cmd", "status")]
+    assert all(re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", m) for m in members), members
+    assert len(set(members)) == len(members)

@@ -149,8 +149,12 @@ class CNames:
         return nm.shorten(name + "_" if name in self._member_reserved else name, IDENT_LIMIT)
 
     def buffer_member(self, ctrl: str, tag: str) -> str:
-        """The members of `<p>_buffers`: `gm`, and `<C>__cmd`, `<C>__status` per controller."""
-        return nm.shorten(self.frag(ctrl) + nm.SEP + tag, IDENT_LIMIT)
+        """The members of `<p>_buffers`: `gm`, and `<C>__cmd`, `<C>__status` per controller.
+        A wrapped fragment starts with a digit, which no C identifier may: it
+        gets `_` first (a member is not at file scope, where `_0` would be
+        reserved; no other member of the struct starts with `_`)."""
+        frag = self.frag(ctrl)
+        return nm.shorten(("_" if frag[:1].isdigit() else "") + frag + nm.SEP + tag, IDENT_LIMIT)
 
     def state(self, name: str) -> str:
         fixed = {"": "ST_NONE", "new": "ST_NEW", "done": "ST_DONE", "error": "ST_ERROR"}
