@@ -17,7 +17,7 @@ from rcsc import safeio
 from rcsc import ast
 from rcsc.diagnostics import Diagnostics
 from rcsc.parse import text_to_ast
-from rcsc.source import SourceFile, Span
+from rcsc.source import SourceFile, Span, skip_trivia
 
 
 class InputError(Exception):
@@ -178,29 +178,13 @@ def _target_span(item: ast.Import) -> Span:
         # STRING is the last token and cannot contain a quote.
         i = text.rfind('"', 0, max(0, len(text) - 1))
         return Span(item.span.file, start + i, item.span.end) if i >= 0 else item.span
-    i = _skip_trivia(text, len("import")) if text.startswith("import") else 0
+    i = skip_trivia(text, len("import")) if text.startswith("import") else 0
     return Span(item.span.file, start + i, item.span.end)
-
-
-def _skip_trivia(text: str, i: int) -> int:
-    """The index of the first character at or after `i` that is not blank or comment."""
-    while i < len(text):
-        if text[i].isspace():
-            i += 1
-        elif text.startswith("//", i):
-            j = text.find("\n", i)
-            i = len(text) if j < 0 else j
-        elif text.startswith("/*", i):
-            j = text.find("*/", i + 2)
-            i = len(text) if j < 0 else j + 2
-        else:
-            break
-    return i
 
 
 def _first_token_span(source: SourceFile) -> Span:
     text = source.text
-    i = _skip_trivia(text, 0)
+    i = skip_trivia(text, 0)
     j = i
     while j < len(text) and not text[j].isspace():
         j += 1

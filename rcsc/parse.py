@@ -89,6 +89,22 @@ def _depth(x) -> int:
     return getattr(x, "depth", 1) if x is not None else 0
 
 
+def nest(parser, node, children):
+    """Record `node`'s nesting depth; report the first node past MAX_NESTING (E0007).
+
+    Both parsers call it (`parser` has `diags` and a `too_deep` flag), so the
+    limit and its finding are one rule.
+    """
+    depth = 1 + max((_depth(c) for c in children), default=0)
+    node.depth = depth
+    if depth > MAX_NESTING and not parser.too_deep:
+        parser.too_deep = True
+        parser.diags.add("E0007", node.span, f"nested more than {MAX_NESTING} levels deep", "too deep here").with_help(
+            "split it: compute parts in locals, or move them into functions"
+        )
+    return node
+
+
 
 # ---- literals in bounded time ------------------------------------------------------------
 #
@@ -163,15 +179,7 @@ class _ToAst(Transformer_NonRecursive):
         return ast.Ident(self.tspan(tok), str(tok))
 
     def nest(self, node, *children):
-        """Record `node`'s nesting depth; report the first node past MAX_NESTING."""
-        depth = 1 + max((_depth(c) for c in children), default=0)
-        node.depth = depth
-        if depth > MAX_NESTING and not self.too_deep:
-            self.too_deep = True
-            self.diags.add("E0007", node.span, f"nested more than {MAX_NESTING} levels deep", "too deep here").with_help(
-                "split it: compute parts in locals, or move them into functions"
-            )
-        return node
+        return nest(self, node, children)
 
     def node_span(self, node) -> Span:
         return node.span if isinstance(node, ast.Node) else self.tspan(node)

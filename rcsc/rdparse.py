@@ -48,7 +48,7 @@ import math
 from rcsc import ast
 from rcsc.diagnostics import Diagnostics
 from rcsc.lexer import DIGITS, NAME_START, is_float, tokenize
-from rcsc.parse import MAX_NESTING, UNIT_NANOS, literal_fraction, literal_int
+from rcsc.parse import MAX_NESTING, UNIT_NANOS, literal_fraction, literal_int, nest
 from rcsc.source import SourceFile, Span
 
 
@@ -71,10 +71,6 @@ _UNITS = frozenset(UNIT_NANOS)
 # Words that start an expression as keywords where a full `expr` may start
 # (so `f(if = 1)` is not a named argument, as in the reference parser).
 _EXPR_KEYWORDS = frozenset(("if", "not", "true", "false"))
-
-
-def _depth(node) -> int:
-    return getattr(node, "depth", 1) if node is not None else 0
 
 
 class _Parser:
@@ -118,15 +114,7 @@ class _Parser:
             raise Fallback
 
     def nest(self, node, *children):
-        """Record `node`'s nesting depth; report the first node past MAX_NESTING (E0007)."""
-        depth = 1 + max((_depth(c) for c in children), default=0)
-        node.depth = depth
-        if depth > MAX_NESTING and not self.too_deep:
-            self.too_deep = True
-            self.diags.add("E0007", node.span, f"nested more than {MAX_NESTING} levels deep", "too deep here").with_help(
-                "split it: compute parts in locals, or move them into functions"
-            )
-        return node
+        return nest(self, node, children)
 
     def nest1(self, node, child):
         """`nest` for one child (no generator: this is the hot path)."""

@@ -111,3 +111,19 @@ class Span:
             and other.start == self.start
             and other.end == self.end
         )
+
+
+def skip_trivia(text: str, i: int) -> int:
+    """The index of the first character at or after `i` that is not blank or comment."""
+    while i < len(text):
+        if text[i].isspace():
+            i += 1
+        elif text.startswith("//", i):
+            j = text.find("\n", i)
+            i = len(text) if j < 0 else j
+        elif text.startswith("/*", i):
+            j = text.find("*/", i + 2)
+            i = len(text) if j < 0 else j + 2
+        else:
+            break
+    return i

@@ -20,6 +20,8 @@ import os
 import stat
 from dataclasses import dataclass
 
+from rcsc.source import skip_trivia
+
 SUFFIX = ".rcs"
 # Folders a recursive search never enters: tool caches and environments.
 _SKIPPED_DIRS = frozenset({"node_modules", "__pycache__", "build", "dist", "target"})
@@ -100,22 +102,6 @@ def header_kind_text(text: str) -> str | None:
         if text.startswith(kind, i) and (len(text) == i + len(kind) or not (text[i + len(kind)].isalnum() or text[i + len(kind)] == "_")):
             return kind
     return None
-
-
-def skip_trivia(text: str, i: int) -> int:
-    """The index of the first character at or after `i` that is not blank or comment."""
-    while i < len(text):
-        if text[i].isspace():
-            i += 1
-        elif text.startswith("//", i):
-            j = text.find("\n", i)
-            i = len(text) if j < 0 else j
-        elif text.startswith("/*", i):
-            j = text.find("*/", i + 2)
-            i = len(text) if j < 0 else j + 2
-        else:
-            break
-    return i
 
 
 def candidate_designs(module_path: str, stop_at: str | None = None) -> list[str]:

@@ -1184,7 +1184,7 @@ def _report(design: Design, c: m.Controller, plan: m.Plan, f: _Finding, diags: D
         d.with_label(first.label_span, f"`{first.label}` fires first")
         d.with_note(f"`{first.label}` (-> {_next_text(first)}) fires and `{main.label}` (-> {_next_text(main)}) does not: the order of the table decides")
         d.with_note(f"they differ in {_difference(first, main, f.state or '')}")
-        d.with_help(f"if neither should win for this input (an off-by-one, a missing `and not ...`), make the conditions exclusive")
+        d.with_help("if neither should win for this input (an off-by-one, a missing `and not ...`), make the conditions exclusive")
         d.with_help(
             f"if `{first.label}` must win (a priority), say so here with `// rcsc: allow(W0515) why` on `{main.label}`'s line; "
             f"`plan {plan.verb} ordered` declares every overlap of the table intended and hides real ones too"
