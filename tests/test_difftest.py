@@ -32,7 +32,9 @@ def case_of(seed: int, hostile: bool = False):
     return generate(seed, hostile=hostile)
 
 # A fixed slice: under a minute on two idle cores.
-SLICE = [1000, 1001, 1002, 1003, 1004, 1005]
+# 5001 and 5069 once failed in Rust: clippy::almost_swapped, and `a + b as f64 < c`
+# (a `<` after a cast inside a sum opened generic arguments).
+SLICE = [1000, 1001, 1002, 1003, 1004, 1005, 5001, 5069]
 
 
 @pytest.mark.parametrize("hostile", [False, True], ids=["plain", "hostile-names"])

@@ -438,3 +438,13 @@ def test_the_runtime_is_copied_in(tmp_path: Path) -> None:
     for copy, original in [(tmp_path / "src/num.rs", runtime / "num.rs")] + [(p, runtime / "host" / p.name) for p in (tmp_path / "host").iterdir()]:
         # Unchanged but for the banner line, which the copy carries in the exact form write_files looks for.
         assert copy.read_text(encoding="utf-8").split("\n")[1:] == original.read_text(encoding="utf-8").split("\n")[1:], copy.name
+
+
+def test_a_comparison_after_a_cast_inside_a_sum_is_parenthesised() -> None:
+    """`a + b as f64 < c` makes rustc read `f64<` as generic arguments."""
+    from rcsc.backends.rust.fmt import Atom, Bin, Cast
+
+    e = Bin.make("<", Bin.make("+", Atom("a"), Cast.make(Atom("b"), "f64")), Atom("c"))
+    assert e.flat() == "(a + b as f64) < c"
+    assert Bin.make("<", Cast.make(Atom("b"), "f64"), Atom("c")).flat() == "(b as f64) < c"
+    assert Bin.make("<", Bin.make("+", Cast.make(Atom("b"), "f64"), Atom("a")), Atom("c")).flat() == "b as f64 + a < c"

@@ -53,7 +53,7 @@ EXPR_ALLOWS = [
     # Comparisons that a type's range decides (`u >= 0` with u: u32, `x <
     # i32::MIN`), conditions that repeat (`if a {} else if a {}`) or contradict
     # themselves (`x < 1 and x > 2`), `x * -1`, `x += x * 2.0`, `x < NAN`, `if c { b = true; } else { b = false; }`, `x < y or x == y`,
-    # `min(max(x, 5), 3)` are legal in a design and mean what they say.
+    # `min(max(x, 5), 3)`, `a = b; b = a;` are legal in a design and mean what they say.
     "unused_comparisons",
     "clippy::absurd_extreme_comparisons",
     "clippy::overly_complex_bool_expr",
@@ -66,6 +66,7 @@ EXPR_ALLOWS = [
     "clippy::needless_bool_assign",
     "clippy::double_comparisons",
     "clippy::min_max",
+    "clippy::almost_swapped",
 ]
 
 

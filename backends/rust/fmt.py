@@ -262,8 +262,9 @@ class Bin(Node):
         p = BIN_PREC[op]
         if left.prec < p or (left.prec == p and p == P_CMP):
             left = Paren(left)
-        elif isinstance(left, Cast) and op == "<":
-            left = Paren(left)  # `x as i32 < y` would start generic arguments
+        elif op == "<" and _ends_in_cast(left):
+            # `x as i32 < y` (also `a + x as i32 < y`) would start generic arguments.
+            left = Paren(left)
         if right.prec <= p:
             right = Paren(right)
         return Bin(op, left, right)
@@ -299,6 +300,13 @@ class Unary(Node):
             return None
         r = self.operand.rewrite(sub)
         return None if r is None else self.op + r
+
+
+def _ends_in_cast(node: "Node") -> bool:
+    """Whether `node` written flat ends in `... as T`, the type a following `<` would open."""
+    while isinstance(node, Bin):
+        node = node.right
+    return isinstance(node, Cast)
 
 
 @dataclass
