@@ -82,8 +82,8 @@ def stages(path: Path) -> dict[str, float]:
     """CPU seconds of each stage of one in-process check (no cache)."""
     from rcsc.checks import FAMILIES
     from rcsc.diagnostics import Diagnostics
-    from rcsc.loader import path_to_files
-    from rcsc.sema import ast_to_model
+    from rcsc.front.loader import path_to_files
+    from rcsc.semantics.sema import ast_to_model
 
     out: dict[str, float] = {}
     was = gc.isenabled()

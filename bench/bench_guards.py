@@ -40,8 +40,8 @@ def load(path: str):
     """The checked model of `path`, every check family but the guard analysis run."""
     from rcsc.checks import FAMILIES, guards
     from rcsc.diagnostics import Diagnostics
-    from rcsc.loader import path_to_files
-    from rcsc.sema import ast_to_model
+    from rcsc.front.loader import path_to_files
+    from rcsc.semantics.sema import ast_to_model
 
     diags = Diagnostics()
     files = path_to_files(path, diags)
@@ -97,7 +97,7 @@ def main(argv: list[str] | None = None) -> int:
     print("-" * len(HEADER))
     caches = [True, False] if args.no_cache else [True]
 
-    from rcsc.testrun import is_design_file
+    from rcsc.sim.testrun import is_design_file
 
     examples = sorted(str(p) for p in (ROOT / "examples").glob("*/*.rcs") if is_design_file(str(p)))
     total = {c: 0.0 for c in caches}

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Speed of the reference interpreter (rcsc/simulate.py + rcsc/runner.py).
+"""Speed of the reference interpreter (rcsc/sim/simulate.py + rcsc/sim/runner.py).
 
     python bench/bench_sim.py                  # both benchmarks
     python bench/bench_sim.py --profile        # and cProfile hotspots
@@ -50,10 +50,10 @@ sys.path.insert(0, str(ROOT))
 
 from rcsc.diagnostics import Diagnostics  # noqa: E402
 from rcsc.driver import check_path  # noqa: E402
-from rcsc.runner import drive, run_scenario  # noqa: E402
-from rcsc.scenario import text_to_scenario  # noqa: E402
-from rcsc.timebase import System  # noqa: E402
-from rcsc.source import SourceFile  # noqa: E402
+from rcsc.sim.runner import drive, run_scenario  # noqa: E402
+from rcsc.front.scenario import text_to_scenario  # noqa: E402
+from rcsc.sim.timebase import System  # noqa: E402
+from rcsc.front.source import SourceFile  # noqa: E402
 
 SUBMARINE = ROOT / "examples" / "submarine" / "submarine.rcs"
 SUB_GOAL_S = 2.0

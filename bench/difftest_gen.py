@@ -679,8 +679,8 @@ def check_case(case: Case) -> tuple[list[str], set[int]]:
 
     from rcsc.diagnostics import Diagnostics
     from rcsc.driver import check_path
-    from rcsc.scenario import text_to_scenario
-    from rcsc.source import SourceFile
+    from rcsc.front.scenario import text_to_scenario
+    from rcsc.front.source import SourceFile
 
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / f"{case.name}.rcs"

@@ -79,10 +79,10 @@ def prepare(case: Case, base: Path) -> Prepared:
     """Write the case, check it and run the reference simulator."""
     from rcsc.diagnostics import Diagnostics
     from rcsc.driver import check_path
-    from rcsc.runner import run_scenario
-    from rcsc.scenario import text_to_scenario
-    from rcsc.source import SourceFile
-    from rcsc.trace import to_jsonl
+    from rcsc.sim.runner import run_scenario
+    from rcsc.front.scenario import text_to_scenario
+    from rcsc.front.source import SourceFile
+    from rcsc.sim.trace import to_jsonl
 
     folder = base / case.name
     folder.mkdir(parents=True, exist_ok=True)

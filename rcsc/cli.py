@@ -24,7 +24,8 @@ from dataclasses import dataclass
 from types import ModuleType
 
 import rcsc
-from rcsc import codes, render, safeio
+from rcsc import codes, render
+from rcsc.outputs import safeio
 from rcsc.diagnostics import Diagnostics
 
 EXIT_OK = 0
@@ -129,7 +130,7 @@ def _check(path: str, as_module: bool = False, cache: bool = False):
     driver = _load_driver()
     try:
         if cache:
-            from rcsc.cache import folder_for
+            from rcsc.checks.cache import folder_for
 
             result = driver.check_path(path, as_module=as_module, cache_dir=folder_for(path))
         else:
@@ -259,7 +260,7 @@ class _CheckRun:
                 self.covered.add(os.path.realpath(f.source.path))
 
     def imports_module(self, design: str, module_real: str) -> bool:
-        from rcsc.loader import InputError, path_to_files
+        from rcsc.front.loader import InputError, path_to_files
 
         try:
             files = path_to_files(design, Diagnostics())
@@ -269,7 +270,7 @@ class _CheckRun:
 
 
 def _run_check(args: argparse.Namespace) -> int:
-    from rcsc import workspace
+    from rcsc.front import workspace
 
     run = _CheckRun(args)
     expanded = workspace.expand(args.paths)
@@ -355,10 +356,10 @@ def _add_sim_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_sim(args: argparse.Namespace) -> int:
-    from rcsc import trace
-    from rcsc.runner import run_scenario
-    from rcsc.scenario import text_to_scenario
-    from rcsc.source import SourceFile
+    from rcsc.sim import trace
+    from rcsc.sim.runner import run_scenario
+    from rcsc.front.scenario import text_to_scenario
+    from rcsc.front.source import SourceFile
 
     result = _check(args.path)
     if not result.ok or result.model is None:
@@ -389,7 +390,7 @@ def _run_sim(args: argparse.Namespace) -> int:
         text = trace.to_vcd(design, run.snapshots, design.base_tick_ns)
     _emit_report(text, args.output)
     if not run.passed:
-        from rcsc.testrun import failure_text
+        from rcsc.sim.testrun import failure_text
 
         _write(sys.stderr, render.escape_controls(failure_text(run)) + "\n")
         return EXIT_FINDINGS
@@ -406,7 +407,7 @@ def _add_test_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_test(args: argparse.Namespace) -> int:
-    from rcsc import testrun
+    from rcsc.sim import testrun
 
     plan, problems = testrun.discover(args.paths)
     for problem in problems:
@@ -465,7 +466,7 @@ def _run_budget(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------------
 
 def _add_graph_arguments(p: argparse.ArgumentParser) -> None:
-    from rcsc.graph import FORMATS, VIEWS
+    from rcsc.outputs.graph import FORMATS, VIEWS
 
     p.add_argument("path", metavar="DESIGN", help="the design's root file")
     p.add_argument("--view", choices=VIEWS, default=None, help="what to draw (default: plan with --plan, else hierarchy)")
@@ -477,7 +478,7 @@ def _add_graph_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_graph(args: argparse.Namespace) -> int:
-    from rcsc import graph
+    from rcsc.outputs import graph
 
     result = _check(args.path)
     if result.model is None:
@@ -518,7 +519,7 @@ def _add_doc_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_doc(args: argparse.Namespace) -> int:
-    from rcsc import doc, graph
+    from rcsc.outputs import doc, graph
 
     result = _check(args.path)
     if result.model is None:
@@ -542,7 +543,7 @@ def _run_doc(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------------
 
 def _add_build_arguments(p: argparse.ArgumentParser) -> None:
-    from rcsc import backend
+    from rcsc.outputs import backend
 
     p.add_argument("path", metavar="DESIGN", help="the design's root file")
     p.add_argument("--target", required=True, choices=sorted(t.name for t in backend.targets()), help="the output language (`rcsc targets`)")
@@ -555,7 +556,7 @@ def _add_build_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_build(args: argparse.Namespace) -> int:
-    from rcsc import backend
+    from rcsc.outputs import backend
 
     result = _check(args.path)
     if result.model is None or not result.ok:
@@ -601,7 +602,7 @@ def _add_targets_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_targets(args: argparse.Namespace) -> int:
-    from rcsc import backend
+    from rcsc.outputs import backend
 
     rows = [f"{t.name:<6} {t.summary}" for t in backend.targets()]
     _write(sys.stdout, "\n".join(rows) + "\n")
@@ -624,7 +625,8 @@ def _run_fmt(args: argparse.Namespace) -> int:
     import stat
 
     from rcsc import config as cfg
-    from rcsc import fmt, workspace
+    from rcsc.editor import fmt
+    from rcsc.front import workspace
 
     if args.paths == ["-"]:
         text = sys.stdin.read()
@@ -694,7 +696,7 @@ def _add_lsp_arguments(p: argparse.ArgumentParser) -> None:
 
 def _run_lsp(args: argparse.Namespace) -> int:
     try:
-        from rcsc import lsp
+        from rcsc.editor import lsp
     except ImportError as exc:
         raise UsageError(f"the language server needs pygls: pip install 'rcsc[lsp]' ({exc})") from exc
     return lsp.main()
@@ -709,7 +711,7 @@ def _add_completion_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_completion(args: argparse.Namespace) -> int:
-    from rcsc import completion
+    from rcsc.editor import completion
 
     _write(sys.stdout, completion.script(args.shell, build_parser()))
     return EXIT_OK

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 from rcsc.codes import CODES
 from rcsc.diagnostics import Diagnostic, Diagnostics, Severity
-from rcsc.source import SourceFile, Span
+from rcsc.front.source import SourceFile, Span
 
 CONFIG_NAME = "rcsc.toml"
 PYPROJECT = "pyproject.toml"

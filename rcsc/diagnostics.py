@@ -12,7 +12,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 
-from rcsc.source import Span
+from rcsc.front.source import Span
 
 
 class Severity(enum.Enum):
@@ -69,7 +69,7 @@ class Diagnostics:
         self.items: list[Diagnostic] = []
         self._seen: set[tuple] = set()
         # Findings an in-source `rcsc: allow(CODE) reason` comment covers
-        # (rcsc.suppress): out of the report, kept for SARIF.
+        # (rcsc.checks.suppress): out of the report, kept for SARIF.
         self.suppressed: list[Diagnostic] = []
 
     def add(

@@ -10,13 +10,13 @@ from __future__ import annotations
 import gc
 from dataclasses import dataclass
 
-from rcsc import cache, suppress
+from rcsc.checks import cache, suppress
 from rcsc.checks import check_model, guards
 from rcsc.diagnostics import Diagnostics
-from rcsc.hints import add_hints
-from rcsc.loader import InputError, LoadedFile, path_to_files
-from rcsc.model import Design
-from rcsc.sema import ast_to_model
+from rcsc.checks.hints import add_hints
+from rcsc.front.loader import InputError, LoadedFile, path_to_files
+from rcsc.semantics.model import Design
+from rcsc.semantics.sema import ast_to_model
 
 __all__ = ["CheckResult", "InputError", "check_path"]
 
@@ -36,7 +36,7 @@ def check_path(path: str, as_module: bool = False, overlay: dict[str, str] | Non
     """Load, analyse and check the design whose root file is `path` (or, with
     `as_module`, the module `path` on its own); `overlay` gives texts that
     replace files on disk (see `loader.path_to_files`).  With `cache_dir`
-    (see `rcsc.cache`), results of the guard analysis are read from and
+    (see `rcsc.checks.cache`), results of the guard analysis are read from and
     written to that folder.
     """
     # A compiler run allocates many long-lived objects and frees few: the

@@ -31,7 +31,7 @@ from urllib.parse import quote
 
 from rcsc.codes import CODES, DOCS_URL, Code, help_uri
 from rcsc.diagnostics import Diagnostic, Diagnostics, Severity
-from rcsc.source import BIDI_CONTROLS, SourceFile, Span
+from rcsc.front.source import BIDI_CONTROLS, SourceFile, Span
 
 # A tab is shown as this many spaces; carets are moved to match.
 TAB_WIDTH = 4

@@ -21,10 +21,10 @@ from pathlib import Path
 
 from rcsc import cli
 from rcsc.driver import check_path
-from rcsc.runner import run_scenario
-from rcsc.scenario import text_to_scenario
-from rcsc.source import SourceFile
-from rcsc.trace import to_jsonl
+from rcsc.sim.runner import run_scenario
+from rcsc.front.scenario import text_to_scenario
+from rcsc.front.source import SourceFile
+from rcsc.sim.trace import to_jsonl
 
 ROOT = Path(__file__).resolve().parent.parent
 

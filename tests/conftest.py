@@ -83,7 +83,7 @@ RENDER_LIB = "module util\nfn bar(x: i32) -> i32 { x }\n"
 
 
 def _span(file, needle: str, length: int | None = None):
-    from rcsc.source import Span
+    from rcsc.front.source import Span
 
     start = file.text.index(needle)
     return Span(file, start, start + (len(needle) if length is None else length))
@@ -95,7 +95,7 @@ def make_render_cases() -> dict:
     Built fresh on every call because diagnostics are mutable.
     """
     from rcsc.diagnostics import Diagnostic, Severity
-    from rcsc.source import SourceFile, Span
+    from rcsc.front.source import SourceFile, Span
 
     design = SourceFile("examples/demo.rcs", RENDER_DESIGN)
     lib = SourceFile("examples/lib/util.rcs", RENDER_LIB)

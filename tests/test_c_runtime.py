@@ -3,7 +3,7 @@
 Built with a hand-made design (tests/c/runtime_fixture.c, described at its
 top) under the strict warning flags, with gcc and, when installed, clang; run
 on scenarios written here.  Checks the exact trace lines (and that they are
-what rcsc/trace.py writes for the same values), the exact scenario errors,
+what rcsc/sim/trace.py writes for the same values), the exact scenario errors,
 the options, the timing table, SIGINT, the console on a pseudo-terminal,
 real-time mode refused without privileges, and a clean run under UBSan and
 ASan.
@@ -26,7 +26,7 @@ from pathlib import Path
 
 import pytest
 
-from rcsc import trace
+from rcsc.sim import trace
 
 ROOT = Path(__file__).resolve().parents[1]
 RUNTIME = ROOT / "backends" / "c" / "runtime"
@@ -175,10 +175,10 @@ def test_trace_of_value_forms(exe, tmp_path):
 
 
 def _fixture_design():
-    """The fixture's declarations as rcsc/trace.py sees a design."""
+    """The fixture's declarations as rcsc/sim/trace.py sees a design."""
     from types import SimpleNamespace as NS
 
-    from rcsc.types import BOOL, DURATION, F64, I32, I64, U32, EnumType, RecordType
+    from rcsc.semantics.types import BOOL, DURATION, F64, I32, I64, U32, EnumType, RecordType
 
     mode = EnumType("Mode", ("IDLE", "RUN", "HALT"))
     pose = RecordType("Pose", (("x", F64), ("y", F64), ("mode", mode)))
@@ -195,7 +195,7 @@ def _fixture_design():
 
 @pytest.mark.parametrize("line", GOOD_TRACE + VALUES_TRACE)
 def test_trace_lines_are_what_trace_py_writes(line):
-    """Read back, the values give the same bytes through rcsc/trace.py's jsonl_line."""
+    """Read back, the values give the same bytes through rcsc/sim/trace.py's jsonl_line."""
     obj = json.loads(line, parse_int=lambda s: -0.0 if s == "-0" else int(s))  # f64 -0 prints as -0
     ctrl = {n: trace.CtrlSnapshot(**c) for n, c in obj["ctrl"].items()}
     assert trace.jsonl_line(_fixture_design(), trace.Snapshot(obj["cycle"], obj["gm"], ctrl)) == line
@@ -232,7 +232,7 @@ UNSUPPORTED = (
 )
 
 # (scenario body after `cycles 5`, expected "LINE:COL: error: message").  The
-# positions and messages are those of `rcsc sim` (rcsc/scenario.py) except
+# positions and messages are those of `rcsc sim` (rcsc/front/scenario.py) except
 # where noted; the C reader stops at the first error.
 ERRORS = {
     "unknown_ctrl": ("at 1: NOPE.INIT()", "2:7: error: no controller named `NOPE`"),
@@ -368,8 +368,8 @@ def rcsc_design(tmp_path_factory):
 
 def _rcsc_first_error(design, text: str):
     from rcsc.diagnostics import Diagnostics
-    from rcsc.scenario import text_to_scenario
-    from rcsc.source import SourceFile
+    from rcsc.front.scenario import text_to_scenario
+    from rcsc.front.source import SourceFile
 
     diags = Diagnostics()
     sc = text_to_scenario(SourceFile("s.scn", text), design, diags)

@@ -1,4 +1,4 @@
-"""The on-disk cache of `rcsc check` (rcsc.cache, `.rcsc-cache/` next to the design).
+"""The on-disk cache of `rcsc check` (rcsc.checks.cache, `.rcsc-cache/` next to the design).
 
 A second run reads the guard analysis from the cache and reports the same
 bytes; corrupt, stale or foreign entries are ignored and rewritten, never a
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from rcsc import cache
+from rcsc.checks import cache
 from rcsc.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -134,7 +134,7 @@ def test_the_folder_tells_tools_it_is_a_cache(tmp_path: Path, capsys) -> None:
 
 
 def test_tagged_json_round_trip() -> None:
-    from rcsc.types import F64, I32
+    from rcsc.semantics.types import F64, I32
 
     value = {("gm", "x"): (1, 2.5, float("nan"), float("-inf"), True, None, "s"), "k": [F64, I32, {"a": -0.0}]}
     back = cache.decode(json.loads(json.dumps(cache.encode(value))), {})

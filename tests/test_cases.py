@@ -14,7 +14,7 @@ A case is either one file `tests/cases/NAME.rcs`, or a folder
 `tests/cases/NAME/` whose root file is `main.rcs` (for imports and
 scenarios); the annotations of every `.rcs` and `.scn` file in the folder
 count.  Every `*.scn` file of a folder is checked as a scenario of the design
-(`rcsc.scenario.text_to_scenario`), except `sim.scn`, which is run with
+(`rcsc.front.scenario.text_to_scenario`), except `sim.scn`, which is run with
 `rcsc sim` when the design has no errors (for the findings only that command
 reports; they are read from its human-readable output), and except folders
 with a file `build-target` (holding a target name), where `rcsc build
@@ -35,7 +35,7 @@ import pytest
 
 from rcsc.codes import CODES
 from rcsc.driver import check_path
-from rcsc.source import SourceFile
+from rcsc.front.source import SourceFile
 
 CASES = Path(__file__).parent / "cases"
 ROOT_FILE = "main.rcs"
@@ -122,7 +122,7 @@ def _check(root: Path):
         result.diags = conf.apply(result.diags)
     scenarios = sorted(root.parent.glob("*.scn")) if root.parent != CASES else []
     if scenarios and result.model is not None:
-        from rcsc.scenario import text_to_scenario
+        from rcsc.front.scenario import text_to_scenario
 
         for scn in scenarios:
             if scn.name == SIM_SCENARIO:

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import pytest
 
-from rcsc.testrun import is_design_file
+from rcsc.sim.testrun import is_design_file
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -12,7 +12,7 @@ import pytest
 
 from rcsc import cli, render
 from rcsc.diagnostics import Diagnostics
-from rcsc.source import SourceFile, Span
+from rcsc.front.source import SourceFile, Span
 
 # One design whose only finding is W0403 (`spare` is never read or written).
 DESIGN = """design {name}

@@ -19,7 +19,7 @@ import rcsc
 from rcsc import cli
 from rcsc.codes import CODES
 from rcsc.diagnostics import Diagnostics
-from rcsc.source import SourceFile, Span
+from rcsc.front.source import SourceFile, Span
 
 
 class FakeInputError(Exception):

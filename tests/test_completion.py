@@ -12,7 +12,9 @@ import subprocess
 
 import pytest
 
-from rcsc import cli, completion
+from rcsc import cli
+
+from rcsc.editor import completion
 from rcsc.codes import CODES
 
 

@@ -1,4 +1,4 @@
-"""`rcsc doc`: the one-page HTML description of a design (rcsc/doc.py).
+"""`rcsc doc`: the one-page HTML description of a design (rcsc/outputs/doc.py).
 
 - the page of each example, opened in a real headless browser (Debian's
   `chromium`): it loads with no JavaScript or console error, every controller
@@ -23,7 +23,9 @@ from pathlib import Path
 
 import pytest
 
-from rcsc import cli, doc, graph
+from rcsc import cli
+
+from rcsc.outputs import doc, graph
 from rcsc.driver import CheckResult, check_path
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from rcsc import doc
+from rcsc.outputs import doc
 from test_doc import EXAMPLES, SCREENSHOTS, checked, chromium, need
 
 # Measured after the page's own load handlers: the page's overflow, and the

@@ -32,7 +32,7 @@ from rcsc import cli
 from rcsc.backends.c.target import CTarget, c_comment
 from rcsc.backends.rust.target import RustTarget, rust_comment
 from rcsc.driver import check_path
-from rcsc.types import DURATION, I32, I64, U32
+from rcsc.semantics.types import DURATION, I32, I64, U32
 
 EDGE = ROOT / "tests/edge/edge.rcs"
 NASTY = [

@@ -23,7 +23,7 @@ from pathlib import Path
 import pytest
 
 from rcsc.cli import main
-from rcsc.testrun import is_design_file, scenarios_of
+from rcsc.sim.testrun import is_design_file, scenarios_of
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"

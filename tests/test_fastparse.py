@@ -1,4 +1,4 @@
-"""The fast parser (rcsc.rdparse) against the reference parser (Lark, grammar/rcs.lark).
+"""The fast parser (rcsc.front.rdparse) against the reference parser (Lark, grammar/rcs.lark).
 
 For every input both must give the same tree, node for node and span for
 span (nesting depths included), and the same findings, byte for byte.  The
@@ -21,9 +21,9 @@ from pathlib import Path
 import pytest
 
 from rcsc.diagnostics import Diagnostics
-from rcsc.parse import text_to_ast, text_to_ast_lark
-from rcsc.rdparse import Fallback, parse_fast
-from rcsc.source import SourceFile, Span
+from rcsc.front.parse import text_to_ast, text_to_ast_lark
+from rcsc.front.rdparse import Fallback, parse_fast
+from rcsc.front.source import SourceFile, Span
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))

@@ -18,9 +18,9 @@ import pytest
 
 from rcsc import cli
 from rcsc.diagnostics import Diagnostics
-from rcsc.fmt import format_text, shape
-from rcsc.parse import text_to_ast
-from rcsc.source import SourceFile
+from rcsc.editor.fmt import format_text, shape
+from rcsc.front.parse import text_to_ast
+from rcsc.front.source import SourceFile
 
 ROOT = Path(__file__).resolve().parent.parent
 ALL_RCS = sorted(p for p in ROOT.rglob("*.rcs") if not any(part.startswith(".") for part in p.relative_to(ROOT).parts))

@@ -691,8 +691,8 @@ def test_grammar_generator_reaches_sema():
     """The generator is worth its time only if much of its output parses, and
     the checker then finds semantic errors (not only syntax errors)."""
     from rcsc.diagnostics import Diagnostics
-    from rcsc.parse import text_to_ast
-    from rcsc.source import SourceFile
+    from rcsc.front.parse import text_to_ast
+    from rcsc.front.source import SourceFile
 
     parsed = 0
     for seed in range(200):

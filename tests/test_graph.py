@@ -1,4 +1,4 @@
-"""`rcsc graph`: the hierarchy, data-flow and plan pictures (rcsc/graph.py).
+"""`rcsc graph`: the hierarchy, data-flow and plan pictures (rcsc/outputs/graph.py).
 
 - golden DOT files of every example: its hierarchy, its data flow and every
   plan, in tests/golden/graph/EXAMPLE/ (regenerate all of them with
@@ -24,7 +24,9 @@ from pathlib import Path
 
 import pytest
 
-from rcsc import cli, graph
+from rcsc import cli
+
+from rcsc.outputs import graph
 from rcsc.driver import CheckResult, check_path
 
 ROOT = Path(__file__).resolve().parent.parent

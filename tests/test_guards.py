@@ -1,4 +1,4 @@
-"""The guard analysis (rcsc.checks.guards, rcsc.smt) against ground truth.
+"""The guard analysis (rcsc.checks.guards, rcsc.checks.smt) against ground truth.
 
 - Ground truth: hypothesis generates state tables over small finite domains
   (bools, a small enum, ints in declared small ranges, a u32 parameter whose
@@ -35,13 +35,13 @@ import z3
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from rcsc import model as m
+from rcsc.semantics import model as m
 from rcsc.checks import guards
 from rcsc.checks.plans import literal_dead_rules, plan_states, rule_sources
 from rcsc.diagnostics import Diagnostics
 from rcsc.driver import check_path
-from rcsc.evaluate import Env, eval_expr
-from rcsc.simulate import Simulator
+from rcsc.semantics.evaluate import Env, eval_expr
+from rcsc.sim.simulate import Simulator
 
 CASES = Path(__file__).parent / "cases"
 GUARD_CODES = {"E0506", "E0513", "W0514", "W0515", "E0516", "W0517", "W0518"}
@@ -455,14 +455,14 @@ def _int_design(tmp_path: Path, exprs: list[str], conditions: bool = False):
 
 
 def _fit(value: int, t) -> int:
-    from rcsc.numeric import wrap
+    from rcsc.semantics.numeric import wrap
 
     return wrap(value, t)
 
 
 @pytest.mark.parametrize("group", ["i32", "u32", "i64", "f64"])
 def test_encoding_matches_the_evaluator(tmp_path: Path, group: str) -> None:
-    from rcsc.smt import F, Encoder, concrete
+    from rcsc.checks.smt import F, Encoder, concrete
 
     exprs = {"i32": INT_EXPRS, "u32": U32_EXPRS, "i64": I64_EXPRS, "f64": F64_BOOL}[group]
     design = _int_design(tmp_path, exprs, conditions=group == "f64")
@@ -490,7 +490,7 @@ def test_encoding_matches_the_evaluator(tmp_path: Path, group: str) -> None:
                     if math.isnan(v):
                         s.add(inp.term.nan)
                     else:
-                        from rcsc.smt import real_of
+                        from rcsc.checks.smt import real_of
 
                         s.add(z3.Not(inp.term.nan), inp.term.r == real_of(v))
                 else:
@@ -569,7 +569,7 @@ def test_witness_note_in_text() -> None:
 
 
 def test_examples_analyse_fast() -> None:
-    from rcsc.testrun import is_design_file
+    from rcsc.sim.testrun import is_design_file
 
     root = Path(__file__).resolve().parents[1]
     total = 0.0

@@ -1,4 +1,4 @@
-""""Did you mean" helps for misspelt names and foreign operators (rcsc.hints)."""
+""""Did you mean" helps for misspelt names and foreign operators (rcsc.checks.hints)."""
 
 from __future__ import annotations
 

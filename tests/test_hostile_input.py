@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from rcsc.cli import main
-from rcsc.parse import TOO_LARGE, literal_fraction, literal_int
+from rcsc.front.parse import TOO_LARGE, literal_fraction, literal_int
 
 ROOT = Path(__file__).resolve().parent.parent
 CASES = ROOT / "tests" / "cases"

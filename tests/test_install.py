@@ -50,7 +50,7 @@ def test_installed_wheel_checks_a_design_from_another_folder(tmp_path: Path) -> 
     shutil.copytree(ROOT / "examples" / "submarine", work)
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     where = subprocess.run(
-        [str(py), "-c", "import rcsc, rcsc.parse; print(rcsc.__file__)"], check=True, cwd=work, env=env, capture_output=True, text=True
+        [str(py), "-c", "import rcsc, rcsc.front.parse; print(rcsc.__file__)"], check=True, cwd=work, env=env, capture_output=True, text=True
     ).stdout.strip()
     assert where.startswith(str(venv)), f"imported rcsc from {where}, not from the installed wheel"
 

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from rcsc import model as m
+from rcsc.semantics import model as m
 from rcsc.driver import check_path
 
 TYPES = {"i32": "7", "i64": "7", "u32": "7", "f64": "7.5", "duration": "7 ms"}

@@ -228,7 +228,7 @@ def test_hover_on_a_code_explains_it_and_verbs_show_their_signature(client: Clie
 
 
 def test_formatting_goes_through_rcsc_fmt(client: Client, tmp_path: Path) -> None:
-    from rcsc.fmt import format_text
+    from rcsc.editor.fmt import format_text
 
     messy = DESIGN.replace("    verb RUN", "\tverb RUN   ")
     path = tmp_path / "d.rcs"

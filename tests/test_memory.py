@@ -12,10 +12,10 @@ from __future__ import annotations
 import gc
 from pathlib import Path
 
-from rcsc import ast
-from rcsc import model as m
+from rcsc.front import ast
+from rcsc.semantics import model as m
 from rcsc.driver import check_path
-from rcsc.source import SourceFile, Span
+from rcsc.front.source import SourceFile, Span
 
 SUBMARINE = Path(__file__).resolve().parents[1] / "examples" / "submarine" / "submarine.rcs"
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from rcsc import model as m
+from rcsc.semantics import model as m
 from rcsc.driver import check_path
 
 SIM = Path(__file__).parent / "sim"
@@ -47,8 +47,8 @@ def test_age_is_a_duration_of_gm_or_status(design) -> None:
 
 def test_scenario_faults_parse(design) -> None:
     from rcsc.diagnostics import Diagnostics
-    from rcsc.scenario import text_to_scenario
-    from rcsc.source import SourceFile
+    from rcsc.front.scenario import text_to_scenario
+    from rcsc.front.source import SourceFile
 
     diags = Diagnostics()
     text = "cycles 20\nat 1: TOP.RUN()\nat 9: freeze LOW\nat 4: stop planner\n"
@@ -68,9 +68,9 @@ def test_scenario_faults_parse(design) -> None:
 
 def run(design, text: str):
     from rcsc.diagnostics import Diagnostics
-    from rcsc.runner import run_scenario
-    from rcsc.scenario import text_to_scenario
-    from rcsc.source import SourceFile
+    from rcsc.sim.runner import run_scenario
+    from rcsc.front.scenario import text_to_scenario
+    from rcsc.front.source import SourceFile
 
     diags = Diagnostics()
     sc = text_to_scenario(SourceFile("t.scn", text), design, diags)
@@ -108,7 +108,7 @@ def test_divided_rate_and_crossing_stamps(design) -> None:
 
 
 def test_trace_lines_in_canonical_order(design) -> None:
-    from rcsc.trace import cycles_to_jsonl
+    from rcsc.sim.trace import cycles_to_jsonl
 
     r = run(design, "cycles 4\nat 1: TOP.RUN()\n")
     text = cycles_to_jsonl(design, r.cpu_cycles)
@@ -265,7 +265,7 @@ def test_sim_cli_writes_the_multi_cpu_trace(tmp_path, capsys) -> None:
 
 
 def test_failures_of_multi_cpu_scenarios_name_ticks(design) -> None:
-    from rcsc.testrun import failure_text
+    from rcsc.sim.testrun import failure_text
 
     r = run(design, "cycles 10\nat 1: TOP.RUN()\nexpect at 7: LOW.done\n")
     assert not r.passed and r.multi_cpu
@@ -377,7 +377,7 @@ def test_random_placements_keep_the_timing_invariants(seed, tmp_path) -> None:
     r2 = run(d, f"cycles {ticks}\nat 1: L3.RUN()\n")  # determinism
     assert (r2.cpu_cycles, r2.trace_snapshots, r2.snapshots) == (r.cpu_cycles, r.trace_snapshots, r.snapshots)
     if len(d.cpus) == 1:  # one CPU: the single-CPU trace, read as that CPU's lines
-        from rcsc.trace import CpuSnapshot
+        from rcsc.sim.trace import CpuSnapshot
 
         (name, cpu), = d.cpus.items()
         r.cpu_cycles = [CpuSnapshot(name, s.cycle, (s.cycle - 1) * cpu.heartbeat_ns, s.gm, s.ctrl) for s in r.trace_snapshots]

@@ -379,7 +379,7 @@ def test_rust_single_cpu_divided_rate_ages_and_freeze(rust_single, case, tmp_pat
 
 def test_a_target_without_a_transport_refuses_what_it_cannot_build():
     """The default of `Target.check`: several CPUs, divided rates and ages of Global Memory are refused."""
-    from rcsc.backend import Target
+    from rcsc.outputs.backend import Target
     from rcsc.diagnostics import Diagnostics
     from rcsc.driver import check_path
 

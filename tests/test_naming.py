@@ -2,7 +2,7 @@
 
 Three layers:
 
-* properties of `rcsc.naming`, `backends/c/naming.py` and
+* properties of `rcsc.outputs.naming`, `backends/c/naming.py` and
   `backends/rust/naming.py` on random and hostile names (hypothesis): every
   kind of name is injective, the kinds that share a C or Rust scope never
   meet, nothing equals a reserved name, and lengths stay in their limits;
@@ -30,7 +30,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from c_build import Builds, cargo_build, compile_c, first_difference, generate, reference_trace, run_main
-from rcsc import naming as nm
+from rcsc.outputs import naming as nm
 from rcsc.backends.c import headers
 from rcsc.backends.c.naming import C_KEYWORDS, HEADER_NAMES, CNames
 from rcsc.backends.rust.naming import RESERVED, RUST_KEYWORDS, RustNames

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 
-from rcsc import numeric
+from rcsc.semantics import numeric
 from rcsc.driver import check_path
-from rcsc.simulate import Simulator
-from rcsc.types import I32, I64, U32
+from rcsc.sim.simulate import Simulator
+from rcsc.semantics.types import I32, I64, U32
 
 I32_MIN, I32_MAX = -(2**31), 2**31 - 1
 

@@ -19,7 +19,7 @@ import pytest
 from conftest import make_render_cases
 from rcsc.diagnostics import Diagnostic, Diagnostics, Label, Severity
 from rcsc.render import render_human, render_json, render_sarif, render_short
-from rcsc.source import SourceFile, Span
+from rcsc.front.source import SourceFile, Span
 
 VERSION = "0.0.0-test"  # fixed, so that goldens survive version bumps
 CASES = sorted(make_render_cases())

@@ -240,7 +240,7 @@ def test_controller_works_in_the_buffers_with_the_shared_rule_layout(tmp_path: P
     """As the C target: the command, the subordinates' status, Global Memory and the
     own status are read and written in place (no copies in the controller), commands
     are written into the subordinate's buffer and made new by the serial at the write
-    phase, `plan == 0` is idle, and the plans follow rcsc.backend.plan_layout."""
+    phase, `plan == 0` is idle, and the plans follow rcsc.outputs.backend.plan_layout."""
     generate(SUBMARINE, "rust", tmp_path)
     pr = (tmp_path / "src/ctrl_PR.rs").read_text(encoding="utf-8")
     struct = pr[pr.index("pub struct PR {"):pr.index("impl PR {")]
@@ -268,7 +268,7 @@ def test_controller_works_in_the_buffers_with_the_shared_rule_layout(tmp_path: P
     assert "match self.plan {" in step and "_ => {}" in step
 
 
-# Every shape of rcsc.backend.plan_layout: groups by state and by a shared leading
+# Every shape of rcsc.outputs.backend.plan_layout: groups by state and by a shared leading
 # condition, hoisted calls (cse_1) in a group that returns and in one that ends the
 # plan, a rule that always fires inside a group (C2) and at the end of the plan
 # (the `*` rule S2), reports, done and error.

@@ -6,11 +6,11 @@ binaries.  Here they are copied into a hand-made crate, tests/rust_fixture/
 (the Rust twin of tests/c/runtime_fixture.c), which is built with cargo in
 debug and release (overflow checks on in both) and run:
 
-- the trace of a scenario, byte for byte (rcsc/trace.py `jsonl_line`);
+- the trace of a scenario, byte for byte (rcsc/sim/trace.py `jsonl_line`);
 - scenario errors as `FILE:LINE:COL: error: ...` with exit status 2;
 - options, the timing table, the heartbeat, SIGINT, the console on a pty;
 - f64 formatting (`%.17g`) against Python's format() on thousands of values;
-- num.rs against rcsc/numeric.py on the edge cases;
+- num.rs against rcsc/semantics/numeric.py on the edge cases;
 - when gcc is there: the same bytes (stdout, stderr, exit status) as the C
   Main Program (backends/c/runtime/rcs_runtime.c) on the same scenarios;
 - `cargo clippy -- -D warnings` and `rustfmt --check` are clean.
@@ -35,9 +35,9 @@ import pytest
 
 from c_build import Console
 
-from rcsc import numeric
-from rcsc.trace import fmt_float
-from rcsc.types import I32, I64, U32
+from rcsc.semantics import numeric
+from rcsc.sim.trace import fmt_float
+from rcsc.semantics.types import I32, I64, U32
 
 ROOT = Path(__file__).resolve().parent.parent
 RUNTIME = ROOT / "backends/rust/runtime"
@@ -447,7 +447,7 @@ def _same_f64(a: float, b: float) -> bool:
     return (math.isnan(a) and math.isnan(b)) or struct.pack("<d", a) == struct.pack("<d", b)
 
 
-def _min_max(name: str, a: float, b: float) -> float:  # rcsc/evaluate.py, builtin min/max on f64
+def _min_max(name: str, a: float, b: float) -> float:  # rcsc/semantics/evaluate.py, builtin min/max on f64
     if math.isnan(a) or math.isnan(b):
         return math.nan
     if name == "min_f64":

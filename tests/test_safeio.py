@@ -1,6 +1,6 @@
 """Files rcsc reads and writes: no link followed, no person's file touched, no half build.
 
-The write phase of `rcsc build` is a transaction (rcsc.safeio): these tests
+The write phase of `rcsc build` is a transaction (rcsc.outputs.safeio): these tests
 plant links and files in the output folder, interrupt the write phase at every
 step (an exception standing for Ctrl-C, an I/O error, a kill), and send real
 SIGINTs to a running build, and each time find the complete old build or the
@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from rcsc import safeio
+from rcsc.outputs import safeio
 from rcsc.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -18,7 +18,7 @@ from conftest import make_render_cases
 from rcsc.codes import CODES
 from rcsc.diagnostics import Diagnostic, Label, Severity
 from rcsc.render import FINGERPRINT_KEY, render_sarif
-from rcsc.source import SourceFile, Span
+from rcsc.front.source import SourceFile, Span
 
 SCHEMA_PATH = Path(__file__).parent / "data" / "sarif-schema-2.1.0.json"
 

@@ -33,10 +33,10 @@ import pytest
 
 from rcsc.diagnostics import Diagnostics
 from rcsc.driver import check_path
-from rcsc.runner import run_scenario
-from rcsc.scenario import text_to_scenario
-from rcsc.simulate import Simulator
-from rcsc.source import SourceFile
+from rcsc.sim.runner import run_scenario
+from rcsc.front.scenario import text_to_scenario
+from rcsc.sim.simulate import Simulator
+from rcsc.front.source import SourceFile
 
 HERE = Path(__file__).parent / "sim"
 
@@ -146,7 +146,7 @@ def test_stale_done_of_previous_command_is_not_done(design) -> None:
 
 
 def test_serial_wraps_past_u32_max_and_skips_zero(design) -> None:
-    from rcsc.simulate import next_serial
+    from rcsc.sim.simulate import next_serial
 
     assert next_serial(0) == 1
     assert next_serial(41) == 42

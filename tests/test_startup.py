@@ -14,7 +14,7 @@ import sys
 
 import pytest
 
-HEAVY = ("z3", "networkx", "jinja2", "lark", "rcsc.checks", "rcsc.graph", "rcsc.smt", "rcsc.backend", "rcsc.driver", "rcsc.parse")
+HEAVY = ("z3", "networkx", "jinja2", "lark", "rcsc.checks", "rcsc.outputs.graph", "rcsc.checks.smt", "rcsc.outputs.backend", "rcsc.driver", "rcsc.front.parse")
 
 _PROBE = """
 import io, json, sys, contextlib
@@ -49,7 +49,7 @@ def test_check_does_load_the_front_end() -> None:
 def test_grammar_cache_is_private_and_reused(tmp_path, monkeypatch) -> None:
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     probe = (
-        "from rcsc.parse import text_to_ast\nfrom rcsc.source import SourceFile\nfrom rcsc.diagnostics import Diagnostics\n"
+        "from rcsc.front.parse import text_to_ast\nfrom rcsc.front.source import SourceFile\nfrom rcsc.diagnostics import Diagnostics\n"
         "d = Diagnostics()\nt = text_to_ast(SourceFile('x.rcs', 'design x\\n'), d)\nprint(t.kind, len(d))\n"
     )
     for _ in range(2):  # the second run loads the file the first one wrote

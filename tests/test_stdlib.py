@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from rcsc.driver import check_path
-from rcsc.loader import stdlib_modules
+from rcsc.front.loader import stdlib_modules
 
 CASES = [
     ("clamp(5.0, 0.0, 1.0)", "f64", 1.0),

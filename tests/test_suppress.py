@@ -1,4 +1,4 @@
-"""In-source suppression: `// rcsc: allow(CODE) reason` (rcsc.suppress)."""
+"""In-source suppression: `// rcsc: allow(CODE) reason` (rcsc.checks.suppress)."""
 
 from __future__ import annotations
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from rcsc.types import BUILTIN_TYPES
+from rcsc.semantics.types import BUILTIN_TYPES
 
 ROOT = Path(__file__).resolve().parent.parent
 GRAMMAR = json.loads((ROOT / "editors" / "vscode" / "syntaxes" / "rcs.tmLanguage.json").read_text())

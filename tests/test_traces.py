@@ -13,7 +13,7 @@ import pytest
 from vcd.reader import TokenKind, tokenize
 
 from rcsc.cli import main
-from rcsc.trace import fmt_float
+from rcsc.sim.trace import fmt_float
 
 SIM = Path(__file__).parent / "sim"
 DESIGN = str(SIM / "ahead_paper.rcs")

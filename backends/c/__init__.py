@@ -8,8 +8,8 @@ is copied from runtime/.  See docs/backends.md.
 
 from __future__ import annotations
 
-from rcsc import model as m
-from rcsc.backend import (
+from rcsc.semantics import model as m
+from rcsc.outputs.backend import (
     OutFile,
     RuleStep,
     initial_value,
@@ -25,8 +25,8 @@ from rcsc.backend import (
 )
 from rcsc.backends.c.tables import main_tables
 from rcsc.backends.c.target import CTarget, _strip_parens, c_comment, c_string
-from rcsc.simulate import zero_value
-from rcsc.types import I32, EnumType, RecordType
+from rcsc.sim.simulate import zero_value
+from rcsc.semantics.types import I32, EnumType, RecordType
 
 RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c", "rcs_shm.h", "rcs_shm.c")
 LAUNCHER_FILES = ("rcs_launch.h", "rcs_launch.c")  # several CPUs only

@@ -1,4 +1,4 @@
-"""Every name in the generated C: one function per kind of name, built on `rcsc.naming`.
+"""Every name in the generated C: one function per kind of name, built on `rcsc.outputs.naming`.
 
 C has one scope for the names of a translation unit (types, functions,
 enumerators, variables) and macros that replace a name everywhere, also as a
@@ -21,7 +21,7 @@ struct member.  The scheme (docs/backends.md, "Names"):
 `<p>` is the design's name, or that name and `_` when a header or the
 runtime uses it as a prefix (a design called `rcs`, `INT32` or `ctrl`).
 Identifiers are cut at 63 characters (C99's significant length) and file
-names at 120 (`rcsc.naming.shorten`); file names that differ only in case get
+names at 120 (`rcsc.outputs.naming.shorten`); file names that differ only in case get
 a hash.
 """
 
@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import re
 
-from rcsc import naming as nm
+from rcsc.outputs import naming as nm
 from rcsc.backends.c.headers import FUNCTIONS, MACROS, OTHERS
 
 C_KEYWORDS = frozenset(

@@ -8,9 +8,9 @@ templates/main.c.j2.
 
 from __future__ import annotations
 
-from rcsc import model as m
-from rcsc.backend import cpu_gm, cpu_ticks, keeps_gm_stamps, ordered_types
-from rcsc.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type
+from rcsc.semantics import model as m
+from rcsc.outputs.backend import cpu_gm, cpu_ticks, keeps_gm_stamps, ordered_types
+from rcsc.semantics.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type
 
 from rcsc.backends.c.target import CTarget, c_string
 

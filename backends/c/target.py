@@ -13,10 +13,10 @@ from __future__ import annotations
 import math
 import re
 
-from rcsc import model as m
+from rcsc.semantics import model as m
 from rcsc.backends.c.naming import CNames
-from rcsc.backend import BuildOptions, CtrlInfo, Target, base_cpu, cpu_ticks, expr_key, impure_functions, lower_controller
-from rcsc.types import BOOL, DURATION, I64, U32, EnumType, FloatType, IntType, RecordType, Type
+from rcsc.outputs.backend import BuildOptions, CtrlInfo, Target, base_cpu, cpu_ticks, expr_key, impure_functions, lower_controller
+from rcsc.semantics.types import BOOL, DURATION, I64, U32, EnumType, FloatType, IntType, RecordType, Type
 
 # Suffix of the rcs_num.h helper for each integer type.
 INT_SUFFIX = {"i32": "i32", "i64": "i64", "u32": "u32", "duration": "i64"}

@@ -22,12 +22,12 @@ from __future__ import annotations
 
 from importlib import resources
 
-from rcsc import model as m
-from rcsc.backend import OutFile, RuleStep, ordered_types, StateTest, built_controllers, expr_key, keeps_gm_stamps, plan_layout, register, schedule_of, tests_state
+from rcsc.semantics import model as m
+from rcsc.outputs.backend import OutFile, RuleStep, ordered_types, StateTest, built_controllers, expr_key, keeps_gm_stamps, plan_layout, register, schedule_of, tests_state
 from rcsc.backends.rust.fmt import Array, Atom, Bin, Call, Node, Struct, arm, assign, expr_stmt, field_decl, fn_head, if_open, let, pad, tail, Unary
 from rcsc.backends.rust.target import RustTarget
-from rcsc.simulate import zero_value
-from rcsc.types import I32, EnumType, RecordType, Type
+from rcsc.sim.simulate import zero_value
+from rcsc.semantics.types import I32, EnumType, RecordType, Type
 
 LIB_ALLOWS = [
     # The design's names are kept as written (controllers, verbs, states, Global Memory).

@@ -1,4 +1,4 @@
-"""Every name in the generated Rust: one function per kind of name, built on `rcsc.naming`.
+"""Every name in the generated Rust: one function per kind of name, built on `rcsc.outputs.naming`.
 
 The crate's design-wide items live in `types` and `functions`, which the
 controllers and the Main Program import with `*`; a name defined in a module
@@ -32,7 +32,7 @@ hash.
 
 from __future__ import annotations
 
-from rcsc import naming as nm
+from rcsc.outputs import naming as nm
 
 RUST_KEYWORDS = frozenset(
     "as break const continue crate else enum extern false fn for if impl in let loop match mod move mut pub ref "

@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import re
 
-from rcsc import model as m
-from rcsc.backend import cpu_gm, cpu_ticks, keeps_gm_stamps, ordered_types
+from rcsc.semantics import model as m
+from rcsc.outputs.backend import cpu_gm, cpu_ticks, keeps_gm_stamps, ordered_types
 from rcsc.backends.rust.fmt import Array, Atom, Call, Cast, Node, Struct, Unary, arm, assign, field_decl, fn_head, let, pad, tail
 from rcsc.backends.rust.target import RustTarget, rust_string
-from rcsc.types import BOOL, DURATION, I32, U32, EnumType, FloatType, IntType, RecordType, Type
+from rcsc.semantics.types import BOOL, DURATION, I32, U32, EnumType, FloatType, IntType, RecordType, Type
 
 _BUILTIN = {"bool": "host::BOOL", "i32": "host::I32", "i64": "host::I64", "u32": "host::U32", "f64": "host::F64", "duration": "host::DURATION"}
 _VALUE = {"bool": "Bool", "i32": "I32", "i64": "I64", "u32": "U32", "f64": "F64", "duration": "Duration"}

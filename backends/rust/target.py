@@ -23,9 +23,9 @@ from __future__ import annotations
 import math
 import re
 
-from rcsc import model as m
+from rcsc.semantics import model as m
 from rcsc.backends.rust.naming import RustNames
-from rcsc.backend import BuildOptions, CtrlInfo, Target, base_cpu, cpu_ticks, expr_key, impure_functions, initial_value, lower_controller
+from rcsc.outputs.backend import BuildOptions, CtrlInfo, Target, base_cpu, cpu_ticks, expr_key, impure_functions, initial_value, lower_controller
 from rcsc.backends.rust.fmt import (
     P_POSTFIX,
     P_UNARY,
@@ -45,7 +45,7 @@ from rcsc.backends.rust.fmt import (
     let,
     pad,
 )
-from rcsc.types import BOOL, DURATION, I64, U32, EnumType, FloatType, IntType, RecordType, Type
+from rcsc.semantics.types import BOOL, DURATION, I64, U32, EnumType, FloatType, IntType, RecordType, Type
 
 INT_NAME = {"i32": "i32", "i64": "i64", "u32": "u32", "duration": "i64"}
 WRAPPING = {"+": "wrapping_add", "-": "wrapping_sub", "*": "wrapping_mul"}

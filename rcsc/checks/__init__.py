@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from rcsc.checks import commands, cycle, floats, guards, hierarchy, ownership, plans, timing, values
 from rcsc.diagnostics import Diagnostics
-from rcsc.model import Design
+from rcsc.semantics.model import Design
 
 FAMILIES = (hierarchy, ownership, plans, commands, floats, timing, cycle, guards, values)
 

@@ -26,11 +26,11 @@ W0522 waiting on a subordinate this plan never commands
 
 from __future__ import annotations
 
-from rcsc import model as m
+from rcsc.semantics import model as m
 from rcsc.checks.guards import front_end_errors
 from rcsc.checks.plans import plan_states, rule_sources, rule_target
 from rcsc.diagnostics import Diagnostics
-from rcsc.model import Design
+from rcsc.semantics.model import Design
 
 STATUS_ATTRS = ("done", "error", "executing", "status", "error_code")
 WAIT_ATTRS = ("done", "status", "executing")

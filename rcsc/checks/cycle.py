@@ -18,11 +18,11 @@ from __future__ import annotations
 
 import re
 
-from rcsc import model as m
+from rcsc.semantics import model as m
 from rcsc.checks.timing import fmt_ns
 from rcsc.diagnostics import Diagnostics
-from rcsc.model import Design
-from rcsc.types import DURATION, FloatType
+from rcsc.semantics.model import Design
+from rcsc.semantics.types import DURATION, FloatType
 
 _PERIOD_NAME = re.compile(r"^(DT|TS|PERIOD|CYCLE|CYCLE_TIME|SAMPLE_TIME|TICK)$|_(DT|PERIOD)$", re.I)
 

@@ -11,10 +11,10 @@ W0523 `==` on f64 in a guard
 
 from __future__ import annotations
 
-from rcsc import model as m
+from rcsc.semantics import model as m
 from rcsc.diagnostics import Diagnostics
-from rcsc.model import Design
-from rcsc.types import FloatType
+from rcsc.semantics.model import Design
+from rcsc.semantics.types import FloatType
 
 
 def check(design: Design, diags: Diagnostics) -> None:

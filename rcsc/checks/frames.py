@@ -15,8 +15,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from math import lcm
 
-from rcsc import model as m
-from rcsc.model import Design
+from rcsc.semantics import model as m
+from rcsc.semantics.model import Design
 
 # A CPU whose dividers have a larger least common multiple is summarised by
 # its frame of cycle 1 only (the heaviest), so the table stays readable.

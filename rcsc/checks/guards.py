@@ -1,7 +1,7 @@
 """Determinism and coverage of state tables, proven with z3 (docs/language.md, the guard analysis).
 
 For every state of every plan this family asks the solver, over the inputs
-the controller reads when it decides (`rcsc.smt` says how each input and
+the controller reads when it decides (`rcsc.checks.smt` says how each input and
 each type is encoded), which rules can never fire, which rules can be true
 together so that the order of the table decides, and for which inputs no
 rule fires.  Each finding carries a witness: values of the inputs that show
@@ -72,9 +72,9 @@ W0518 (warning) guard analysis incomplete
     could not be encoded.  Never a silent pass: the rest of that plan is not
     analysed and the finding says what was being asked.
 
-f64 and externs make some results approximate (see `rcsc.smt`): findings
+f64 and externs make some results approximate (see `rcsc.checks.smt`): findings
 say so in a note.  Every witness is replayed by the reference simulator's
-rule selection (`rcsc.simulate.Simulator.select_rule`) before it is reported;
+rule selection (`rcsc.sim.simulate.Simulator.select_rule`) before it is reported;
 a witness that does not show the claim after rounding to doubles is marked
 approximate.
 
@@ -106,11 +106,11 @@ from types import SimpleNamespace
 
 import z3
 
-from rcsc import model as m
+from rcsc.semantics import model as m
 from rcsc.checks.plans import literal_dead_rules, plan_states, rule_sources
 from rcsc.diagnostics import Diagnostic, Diagnostics, Severity
-from rcsc.model import Design
-from rcsc.smt import (
+from rcsc.semantics.model import Design
+from rcsc.checks.smt import (
     APPROX_ARITH,
     F,
     Encoder,
@@ -121,11 +121,11 @@ from rcsc.smt import (
     format_value,
     json_value,
 )
-from rcsc.source import Span
-from rcsc.smt import _and as _z3_and
-from rcsc.smt import _rational as _rational_of
-from rcsc.smt import real_of
-from rcsc.types import DURATION, EnumType, FloatType, RecordType, Type
+from rcsc.front.source import Span
+from rcsc.checks.smt import _and as _z3_and
+from rcsc.checks.smt import _rational as _rational_of
+from rcsc.checks.smt import real_of
+from rcsc.semantics.types import DURATION, EnumType, FloatType, RecordType, Type
 
 # The budget of one solver query.  The resource limit is deterministic (the
 # same answer on every machine; 2M units take about 0.8 s on a 2024 laptop);
@@ -149,7 +149,7 @@ class Options:
     timeout_ms: int = field(default_factory=lambda: _env_int("RCSC_GUARD_TIMEOUT_MS", TIMEOUT_MS))
     rlimit: int = field(default_factory=lambda: _env_int("RCSC_GUARD_RLIMIT", RLIMIT))
     cache: bool = True
-    # Where results outlive the run (`rcsc.cache`); None: kept in memory only.
+    # Where results outlive the run (`rcsc.checks.cache`); None: kept in memory only.
     store: object = None
 
 
@@ -1023,7 +1023,7 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
 # ---- the on-disk cache -----------------------------------------------------------------------
 #
 # The in-memory cache above shares one analysis between plans of the same
-# shape.  The on-disk one (rcsc.cache) is keyed more narrowly, so that a
+# shape.  The on-disk one (rcsc.checks.cache) is keyed more narrowly, so that a
 # stored result is exactly what analysing the plan again would give: the
 # plan's shape, the real names of its inputs, states, controller and verb,
 # the values a witness prefers (initial values), the definitions of every
@@ -1031,7 +1031,7 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
 
 
 def _stored_key(design: Design, c: m.Controller, plan: m.Plan, canon: _Canon, opts: Options) -> str:
-    from rcsc.cache import digest
+    from rcsc.checks.cache import digest
 
     types = (
         tuple((n, tuple(t.members)) for n, t in sorted(design.enums.items())),
@@ -1067,7 +1067,7 @@ def _stored_key(design: Design, c: m.Controller, plan: m.Plan, canon: _Canon, op
 
 
 def _load(store, key: str, design: Design) -> list[_Finding] | None:
-    from rcsc.cache import decode
+    from rcsc.checks.cache import decode
 
     data = store.get(key)
     if not isinstance(data, list):
@@ -1087,7 +1087,7 @@ def _load(store, key: str, design: Design) -> list[_Finding] | None:
 
 
 def _save(store, key: str, findings: list[_Finding]) -> None:
-    from rcsc.cache import NotStorable, encode
+    from rcsc.checks.cache import NotStorable, encode
 
     if any(f.span is not None for f in findings):
         return  # spans belong to this run's source files
@@ -1248,7 +1248,7 @@ def _name_type(design: Design, c: m.Controller, plan: m.Plan, key: tuple) -> tup
     if kind == "view":
         return key[1], None
     if kind == "error_code":
-        from rcsc.types import I32
+        from rcsc.semantics.types import I32
 
         return f"{key[1]}.error_code", I32
     if kind == "age":
@@ -1361,12 +1361,12 @@ def _same(a, b) -> bool:
 def apply_witness(sim, controller: str, plan: m.Plan, state: str, values: dict[tuple, object]):
     """Put `sim`'s runtime of `controller` into `state` of `plan` with the witness's inputs.
 
-    `sim` is a `rcsc.simulate.Simulator` (or anything with its `design`,
+    `sim` is a `rcsc.sim.simulate.Simulator` (or anything with its `design`,
     `cycle`, `now`, `period_ns` and `externs`).  Returns the `_StepEnv` to pass to
     `Simulator.select_rule(plan, state, env)`.  Inputs the witness does not
     name keep their initial values.
     """
-    from rcsc.simulate import CommandBuffer, ControllerRuntime, StatusBuffer, _StepEnv, clone, zero_value
+    from rcsc.sim.simulate import CommandBuffer, ControllerRuntime, StatusBuffer, _StepEnv, clone, zero_value
 
     design = sim.design
     c = design.controllers[controller]
@@ -1439,8 +1439,8 @@ def _store(container: dict, path: tuple, value) -> None:
 
 def _replays(design: Design, c: m.Controller, plan: m.Plan, f: _Finding) -> bool:
     """Whether the reference simulator's rule selection shows the finding at its witness."""
-    from rcsc.evaluate import eval_expr
-    from rcsc.simulate import Simulator
+    from rcsc.semantics.evaluate import eval_expr
+    from rcsc.sim.simulate import Simulator
 
     values = f.sample if f.code == "W0517" else f.witness
     if f.state is None or not values and f.code != "W0517":

@@ -12,7 +12,7 @@ from __future__ import annotations
 import networkx as nx
 
 from rcsc.diagnostics import Diagnostics
-from rcsc.model import Design
+from rcsc.semantics.model import Design
 
 MAX_SUBORDINATES = 9
 

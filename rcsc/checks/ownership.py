@@ -11,8 +11,8 @@ from __future__ import annotations
 import re
 
 from rcsc.diagnostics import Diagnostics
-from rcsc.model import Design, Var
-from rcsc.source import Span
+from rcsc.semantics.model import Design, Var
+from rcsc.front.source import Span
 
 # `gm`, then blanks and comments, then the name.
 _GM_HEAD = re.compile(r"gm(?:\s|//[^\n]*|/\*.*?\*/)*", re.S)

@@ -14,10 +14,10 @@ from __future__ import annotations
 
 import networkx as nx
 
-from rcsc import model as m
+from rcsc.semantics import model as m
 from rcsc.diagnostics import Diagnostics
-from rcsc.hints import closest
-from rcsc.model import Design
+from rcsc.checks.hints import closest
+from rcsc.semantics.model import Design
 
 MAX_RULES = 10
 DONE, ERROR = "<done>", "<error>"

@@ -12,11 +12,11 @@ simulator and the backends.
 
 from __future__ import annotations
 
-from rcsc import model as m
+from rcsc.semantics import model as m
 from rcsc.checks.frames import fmt_ns, worst_frame
 from rcsc.diagnostics import Diagnostics
-from rcsc.model import Design
-from rcsc.types import DURATION
+from rcsc.semantics.model import Design
+from rcsc.semantics.types import DURATION
 
 
 def budget_table(design: Design, cpu: m.Cpu) -> list[tuple[str, int]]:

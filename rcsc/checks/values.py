@@ -29,13 +29,13 @@ from __future__ import annotations
 
 import z3
 
-from rcsc import model as m
+from rcsc.semantics import model as m
 from rcsc.checks.guards import front_end_errors, nan_params
 from rcsc.checks.plans import plan_states, rule_sources
 from rcsc.diagnostics import Diagnostics
-from rcsc.model import Design
-from rcsc.smt import F, Encoder, HasTypeError, Unsupported, concrete, format_value, real_of
-from rcsc.types import DURATION, FloatType, IntType, Type
+from rcsc.semantics.model import Design
+from rcsc.checks.smt import F, Encoder, HasTypeError, Unsupported, concrete, format_value, real_of
+from rcsc.semantics.types import DURATION, FloatType, IntType, Type
 
 TIMEOUT_MS = 2000
 RLIMIT = 1_000_000

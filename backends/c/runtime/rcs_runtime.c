@@ -9,8 +9,8 @@
  *     (grammar/scenario.lark) that accepts, as values, the constant subset a
  *     compiled program can evaluate without the compiler (literals,
  *     constants, enum members, record constructors, unary minus) and checks
- *     them the way `rcsc sim` does (rcsc/scenario.py, rcsc/typecheck.py);
- *   - the canonical JSON-lines trace (rcsc/trace.py, jsonl_line);
+ *     them the way `rcsc sim` does (rcsc/front/scenario.py, rcsc/semantics/typecheck.py);
+ *   - the canonical JSON-lines trace (rcsc/sim/trace.py, jsonl_line);
  *   - rcs_main: options, the heartbeat on absolute deadlines, real-time
  *     mode, the console (pause, single step, quit) and the timing table.
  * The Main Program may allocate; the controllers never call this file.
@@ -1096,7 +1096,7 @@ static int check_input(parser *p, rcs_scenario *sc, const item *it, size_t seq) 
     return store_value(p, it->value, d->gm_fields[gi].type, ev.blob, it->value->tok);
 }
 
-/* `at N: stop CPU` / `at N: freeze CTRL`, as rcsc/scenario.py checks them. */
+/* `at N: stop CPU` / `at N: freeze CTRL`, as rcsc/front/scenario.py checks them. */
 static int check_fault(parser *p, rcs_scenario *sc, const item *it) {
     const rcs_design *d = p->d;
     const uint64_t tick = it->num_ovf ? UINT64_MAX : it->num;
@@ -1194,7 +1194,7 @@ static int check_items(parser *p, rcs_scenario *sc) {
         return 0;
     }
     sc->cycles = cycles;
-    /* As rcsc/scenario.py reports them: commands, inputs, then windows. */
+    /* As rcsc/front/scenario.py reports them: commands, inputs, then windows. */
     for (int pass = 0; pass < 4; pass++) {
         for (size_t i = 0; i < p->n_items; i++) {
             const item *it = &p->items[i];

@@ -5,7 +5,7 @@
 // acceptance, same messages).  As values it accepts the constant subset a
 // compiled program can evaluate without the compiler (literals, constants,
 // enum members, record constructors, unary minus) and checks them the way
-// `rcsc sim` does (rcsc/scenario.py, rcsc/typecheck.py).  `expect` items
+// `rcsc sim` does (rcsc/front/scenario.py, rcsc/semantics/typecheck.py).  `expect` items
 // are skipped: `rcsc test` checks expectations.  Positions are 1-based
 // lines and columns counted in characters; the first error ends the
 // reading.
@@ -1397,7 +1397,7 @@ impl Scenario {
             return Err(p.error(cycles_tok, "a scenario runs at least one cycle"));
         }
         sc.cycles = cycles;
-        // As rcsc/scenario.py reports them: commands, inputs, then windows.
+        // As rcsc/front/scenario.py reports them: commands, inputs, then windows.
         let check = |at: usize, num_tok: usize, num: (u64, bool)| {
             if !num.1 && num.0 >= 1 && num.0 <= cycles {
                 Ok(())

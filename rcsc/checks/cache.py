@@ -1,0 +1,169 @@
+"""Results kept between runs: a small on-disk store under `.rcsc-cache/`.
+
+`rcsc check` keeps the guard analysis of each plan shape (see
+`rcsc.checks.guards`) in the folder `.rcsc-cache/` next to the design's root
+file, so that a second run, or an editor re-checking after a change, only
+asks the solver about plans whose shape changed.  `--no-cache` (or
+`RCSC_NO_CACHE=1`) turns it off; deleting the folder is always safe.
+
+Each entry is one JSON file named by the SHA-256 of its key.  The file
+holds a format number, the key, the version of the code that wrote it (a
+hash of rcsc's own sources and the z3 version, so an upgrade never reads an
+old entry) and a checksum of the payload.  Writes are atomic
+(`rcsc.outputs.safeio.write_file`).  An entry that is missing, stale, truncated or
+otherwise corrupt is ignored (the result is computed again and the entry
+rewritten); a folder that cannot be written just means no caching.  Nothing
+here raises.
+
+Values are JSON with tags for what JSON lacks: tuples, floats (exact, NaN
+and infinities included, as hex), dictionaries with non-string keys and
+rcsc types (by name, resolved against the design that reads the entry).
+No entry is ever executed or unpickled: a cache folder that came with a
+downloaded design cannot run code.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from functools import lru_cache
+from pathlib import Path
+
+from rcsc.outputs import safeio
+from rcsc.semantics.types import BUILTIN_TYPES, Type
+
+FORMAT = 1
+FOLDER = ".rcsc-cache"
+_MAX_ENTRY = 16 * 1024 * 1024  # bytes; a larger file is not an entry of ours
+
+
+@lru_cache(maxsize=1)
+def code_version() -> str:
+    """A hash of the sources of the installed rcsc package and of the z3 version."""
+    import z3
+
+    digest = hashlib.sha256(z3.get_version_string().encode())
+    base = Path(__file__).resolve().parents[1]  # the rcsc package, not this folder
+    for path in sorted(base.rglob("*.py")):
+        digest.update(str(path.relative_to(base)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:32]
+
+
+def folder_for(design_path: str) -> str:
+    """The cache folder of the design whose root file is `design_path`."""
+    return os.path.join(os.path.dirname(os.path.abspath(design_path)), FOLDER)
+
+
+def disabled_by_environment() -> bool:
+    return os.environ.get("RCSC_NO_CACHE", "") not in ("", "0")
+
+
+class Store:
+    """Entries of one namespace (e.g. "guards") in one cache folder."""
+
+    def __init__(self, folder: str, namespace: str) -> None:
+        self.folder = folder
+        self.namespace = namespace
+        self.writable = True
+        self.hits = self.misses = self.writes = 0
+
+    def _path(self, key: str) -> str:
+        return os.path.join(self.folder, f"{self.namespace}-{key}.json")
+
+    def get(self, key: str):
+        """The value stored under `key` (a hex digest), or None."""
+        try:
+            raw = safeio.read_input(self._path(key), _MAX_ENTRY)
+            doc = json.loads(raw)
+            payload = doc["payload"]
+            ok = (
+                doc["format"] == FORMAT
+                and doc["key"] == key
+                and doc["code"] == code_version()
+                and doc["checksum"] == hashlib.sha256(payload.encode()).hexdigest()
+            )
+            value = json.loads(payload) if ok else None
+        except (OSError, ValueError, KeyError, TypeError):
+            value = None
+        if value is None:
+            self.misses += 1
+        else:
+            self.hits += 1
+        return value
+
+    def put(self, key: str, value) -> None:
+        """Store `value` (JSON-able after `encode`) under `key`; silently skipped when the folder is not writable."""
+        if not self.writable:
+            return
+        payload = json.dumps(value, separators=(",", ":"), allow_nan=False)
+        doc = {
+            "format": FORMAT,
+            "key": key,
+            "code": code_version(),
+            "checksum": hashlib.sha256(payload.encode()).hexdigest(),
+            "payload": payload,
+        }
+        try:
+            if not os.path.isdir(self.folder):
+                os.makedirs(self.folder, exist_ok=True)
+                # Tell version control and backup tools what this folder is.
+                safeio.write_file(os.path.join(self.folder, ".gitignore"), b"# written by rcsc: a cache, safe to delete\n*\n")
+                safeio.write_file(
+                    os.path.join(self.folder, "CACHEDIR.TAG"),
+                    b"Signature: 8a477f597d28d172789f06886806bc55\n# rcsc check's cache; see https://bford.info/cachedir/\n",
+                )
+            safeio.write_file(self._path(key), json.dumps(doc).encode())
+            self.writes += 1
+        except OSError:
+            self.writable = False
+
+
+def digest(key) -> str:
+    """The hex SHA-256 of a key made of tuples, strings, numbers and None."""
+    return hashlib.sha256(repr(key).encode()).hexdigest()
+
+
+# ---- tagged JSON ---------------------------------------------------------------------------
+
+
+class NotStorable(Exception):
+    """A value the tagged JSON cannot hold (the entry is then not written)."""
+
+
+def encode(value):
+    """`value` as plain JSON data (see the module docstring)."""
+    if value is None or isinstance(value, (bool, str)):
+        return value
+    if isinstance(value, int):
+        return value
+    if isinstance(value, float):
+        return {"f": value.hex()}
+    if isinstance(value, tuple):
+        return {"t": [encode(v) for v in value]}
+    if isinstance(value, list):
+        return [encode(v) for v in value]
+    if isinstance(value, dict):
+        return {"d": [[encode(k), encode(v)] for k, v in value.items()]}
+    if isinstance(value, Type):
+        return {"ty": str(value)}
+    raise NotStorable(type(value).__name__)
+
+
+def decode(data, types: dict[str, Type]):
+    """The value `encode` turned into `data`; `types` resolves type names (KeyError if unknown)."""
+    if isinstance(data, list):
+        return [decode(v, types) for v in data]
+    if isinstance(data, dict):
+        if "f" in data:
+            return float.fromhex(data["f"])
+        if "t" in data:
+            return tuple(decode(v, types) for v in data["t"])
+        if "d" in data:
+            return {decode(k, types): decode(v, types) for k, v in data["d"]}
+        if "ty" in data:
+            name = data["ty"]
+            return BUILTIN_TYPES[name] if name in BUILTIN_TYPES else types[name]
+        raise ValueError("unknown tag")
+    return data

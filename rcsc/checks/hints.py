@@ -1,0 +1,120 @@
+""""Did you mean" helps for typos, added after every stage has run.
+
+A misspelt name is the most common mistake and the most confusing one to
+read about: `levl_m` is "not found", a plan `FILL_T0` is "for a verb the
+controller does not declare".  This pass looks at the findings about unknown
+names (E0100, E0103, E0104, E0105, E0501) and at syntax errors where an
+operator of another language was written (`&&`, `||`, `!`, `else if`), and
+adds a help naming the closest declared name or the rcs spelling.  It only
+adds helps; it never changes a finding's code, span or message.
+"""
+
+from __future__ import annotations
+
+import difflib
+import re
+
+from rcsc.diagnostics import Diagnostic, Diagnostics
+from rcsc.semantics.model import Design
+
+_QUOTED = re.compile(r"`([^`]*)`")
+
+
+def closest(name: str, candidates) -> str | None:
+    """The declared name closest to `name` (case ignored), if one is close enough."""
+    cands = sorted({c for c in candidates if c and c != name})
+    if not cands:
+        return None
+    lower = {c.lower(): c for c in cands}
+    if name.lower() in lower:
+        return lower[name.lower()]
+    hit = difflib.get_close_matches(name.lower(), list(lower), n=1, cutoff=0.75)
+    return lower[hit[0]] if hit else None
+
+
+def _scope_names(design: Design) -> set[str]:
+    names: set[str] = set(design.consts) | set(design.gm) | set(design.functions) | set(design.enums) | set(design.records)
+    for c in design.controllers.values():
+        names |= set(c.locals) | set(c.status_fields) | {u.name for u in c.subordinates}
+        for v in c.verbs.values():
+            names |= {p.name for p in v.params}
+    return names
+
+
+def _controller_at(design: Design, d: Diagnostic):
+    if d.span is None:
+        return None
+    for c in design.controllers.values():
+        if c.span.file is d.span.file and c.span.start <= d.span.start < c.span.end:
+            return c
+    return None
+
+
+def _candidates(design: Design, d: Diagnostic) -> list[str]:
+    quoted = _QUOTED.findall(d.message)
+    if d.code == "E0100":
+        return sorted(_scope_names(design))
+    if d.code == "E0104":
+        return list(design.controllers)
+    if d.code == "E0105" and quoted:
+        sub = design.controllers.get(quoted[0])
+        return list(sub.verbs) if sub else []
+    if d.code == "E0501":
+        c = _controller_at(design, d)
+        return list(c.verbs) if c else []
+    if d.code == "E0103" and len(quoted) >= 2:
+        owner = quoted[0]
+        if d.message.startswith("enum") and owner in design.enums:
+            return list(getattr(design.enums[owner], "members", []))
+        if d.message.startswith("record") and owner in design.records:
+            return [f for f, _ in getattr(design.records[owner], "fields", [])]
+        if d.message.startswith("subordinate") and owner in design.controllers:
+            sub = design.controllers[owner]
+            return ["done", "error", "executing", "error_code", "age"] + list(sub.statuses) + list(sub.status_fields)
+        if d.message.startswith("verb"):
+            c = _controller_at(design, d)
+            v = c.verbs.get(owner) if c else None
+            return [p.name for p in v.params] if v else []
+    return []
+
+
+# Operators of C-like languages and the rcs spelling (section 6 of docs/language.md).
+_FOREIGN = (
+    ("&&", "`and`"),
+    ("||", "`or`"),
+)
+
+
+def _syntax_hint(d: Diagnostic) -> str | None:
+    if d.span is None:
+        return None
+    text = d.span.file.text
+    at = d.span.start
+    for op, word in _FOREIGN:
+        for start in (at, at - 1):
+            if start >= 0 and text.startswith(op, start):
+                return f"rcs writes {word} for `{op}`"
+    if text.startswith("!", at) and not text.startswith("!=", at):
+        return "rcs writes `not` for `!`"
+    before = text[max(0, at - 40):at].rstrip()
+    if text.startswith("if", at) and before.endswith("else"):
+        return "rcs writes `elif` for `else if`"
+    return None
+
+
+def add_hints(diags: Diagnostics, design: Design | None) -> None:
+    """Add "did you mean" helps to the findings about unknown names and foreign operators."""
+    for d in diags.items:
+        if d.code in ("E0001", "E0002"):
+            hint = _syntax_hint(d)
+            if hint is not None:
+                d.helps.insert(0, hint)
+            continue
+        if design is None or d.code not in ("E0100", "E0103", "E0104", "E0105", "E0501") or d.span is None:
+            continue
+        name = d.span.text
+        if not name.isidentifier():
+            continue
+        best = closest(name, _candidates(design, d))
+        if best is not None:
+            d.helps.insert(0, f"did you mean `{best}`?")

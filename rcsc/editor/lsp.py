@@ -1,0 +1,297 @@
+"""The language server (`rcsc lsp`, Language Server Protocol over stdio).
+
+Built on pygls (the optional dependency `rcsc[lsp]`).  For each open `.rcs`
+document it publishes the same findings as `rcsc check` (configuration
+included), from the editor's unsaved text: on open and save at once, while
+typing after a short pause (a newer edit cancels the pending check).  A
+module is checked through the design that imports it (found as `rcsc check`
+finds it), with the unsaved texts of every open document.
+
+Requests: hover (a name's declaration, a verb's signature, the explanation
+of a diagnostic code under the cursor), go to definition (names, states,
+verbs, controllers, enum members), document symbols (controllers with their
+verbs and plans and rules, global declarations), completion of names, and
+whole-document formatting through `rcsc fmt`.
+
+Positions: LSP counts characters in UTF-16 code units, rcsc in code points;
+`_position` and `_offset` convert.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+from urllib.parse import unquote, urlparse
+
+from lsprotocol import types as lsp
+from pygls.lsp.server import LanguageServer
+
+import rcsc
+from rcsc import codes
+from rcsc.editor import fmt, symbols
+from rcsc.front import workspace
+from rcsc import config as cfg
+from rcsc.diagnostics import Diagnostics, Severity
+from rcsc.front.source import SourceFile, Span
+
+DEBOUNCE_SECONDS = 0.15
+
+_SEVERITY = {
+    Severity.ERROR: lsp.DiagnosticSeverity.Error,
+    Severity.WARNING: lsp.DiagnosticSeverity.Warning,
+    Severity.NOTE: lsp.DiagnosticSeverity.Information,
+}
+
+_KIND = {
+    "const": lsp.SymbolKind.Constant,
+    "gm": lsp.SymbolKind.Variable,
+    "fn": lsp.SymbolKind.Function,
+    "extern": lsp.SymbolKind.Function,
+    "enum": lsp.SymbolKind.Enum,
+    "member": lsp.SymbolKind.EnumMember,
+    "record": lsp.SymbolKind.Struct,
+    "verb-set": lsp.SymbolKind.Interface,
+    "controller": lsp.SymbolKind.Class,
+    "verb": lsp.SymbolKind.Method,
+    "plan": lsp.SymbolKind.Namespace,
+    "rule": lsp.SymbolKind.Event,
+    "local": lsp.SymbolKind.Field,
+    "status": lsp.SymbolKind.Property,
+    "cpu": lsp.SymbolKind.Module,
+    "state": lsp.SymbolKind.EnumMember,
+}
+
+
+def uri_to_path(uri: str) -> str:
+    parsed = urlparse(uri)
+    return unquote(parsed.path) if parsed.scheme == "file" else uri
+
+
+def path_to_uri(path: str) -> str:
+    from pathlib import Path
+
+    return Path(os.path.abspath(path)).as_uri()
+
+
+def _utf16_len(text: str) -> int:
+    return len(text.encode("utf-16-le")) // 2
+
+
+def _position(source: SourceFile, offset: int) -> lsp.Position:
+    line, col = source.line_col(offset)
+    return lsp.Position(line=line - 1, character=_utf16_len(source.line_text(line)[: col - 1]))
+
+
+def _offset(source: SourceFile, pos: lsp.Position) -> int:
+    """The code-point offset of an LSP position (UTF-16 column)."""
+    line = pos.line + 1
+    if line > source.line_count:
+        return len(source.text)
+    text = source.line_text(line)
+    units = 0
+    for i, ch in enumerate(text):
+        if units >= pos.character:
+            return source._line_starts[line - 1] + i
+        units += 2 if ord(ch) > 0xFFFF else 1
+    return source._line_starts[line - 1] + len(text)
+
+
+def _range(span: Span) -> lsp.Range:
+    return lsp.Range(start=_position(span.file, span.start), end=_position(span.file, max(span.start, span.end)))
+
+
+class RcsServer(LanguageServer):
+    """The server and its state: the last check of each open document."""
+
+    def __init__(self) -> None:
+        super().__init__("rcsc", rcsc.__version__)
+        self.pending: dict[str, asyncio.Task] = {}
+        self.indexes: dict[str, symbols.Index] = {}  # uri -> index of its design
+        self.sources: dict[str, SourceFile] = {}  # uri -> the text the index was built from
+
+    # -- checking ------------------------------------------------------------
+
+    def overlay(self) -> dict[str, str]:
+        out = {}
+        for uri, doc in self.workspace.text_documents.items():
+            path = uri_to_path(uri)
+            out[os.path.realpath(path)] = doc.source
+        return out
+
+    def check(self, uri: str) -> list[lsp.Diagnostic]:
+        """Check the document `uri` now; publish and return its findings."""
+        from rcsc import driver
+
+        path = uri_to_path(uri)
+        doc = self.workspace.get_text_document(uri)
+        overlay = self.overlay()
+        real = os.path.realpath(path)
+        root, as_module = path, False
+        if workspace.header_kind_text(doc.source) == "module":
+            as_module = True
+            for design in workspace.candidate_designs(path):
+                try:
+                    files = driver.path_to_files(design, Diagnostics(), overlay=overlay)
+                except driver.InputError:
+                    continue
+                if any(os.path.realpath(f.source.path) == real for f in files if not f.is_root):
+                    root, as_module = design, False
+                    break
+        try:
+            result = driver.check_path(root, as_module=as_module, overlay=overlay)
+        except driver.InputError as exc:
+            diag = lsp.Diagnostic(range=lsp.Range(start=lsp.Position(line=0, character=0), end=lsp.Position(line=0, character=0)),
+                                  message=str(exc), severity=lsp.DiagnosticSeverity.Error, source="rcsc")
+            self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri=uri, diagnostics=[diag], version=doc.version))
+            return [diag]
+        config_diags = Diagnostics()
+        found = cfg.find(path)
+        conf = cfg.load(found[0], found[1], config_diags) if found else cfg.Config()
+        reported = conf.apply(result.diags)
+        self.indexes[uri] = symbols.build([f.tree for f in result.files if f.tree is not None])
+        own = next((f.source for f in result.files if os.path.realpath(f.source.path) == real), None)
+        self.sources[uri] = own or SourceFile(path, doc.source)
+        out = []
+        for d in reported.sorted():
+            if d.span is None or os.path.realpath(d.span.file.path) != real:
+                continue
+            message = d.message
+            for note in d.notes:
+                message += f"\nnote: {note}"
+            for help_ in d.helps:
+                message += f"\nhelp: {help_}"
+            related = [
+                lsp.DiagnosticRelatedInformation(
+                    location=lsp.Location(uri=path_to_uri(label.span.file.path), range=_range(label.span)), message=label.message
+                )
+                for label in d.labels
+                if not label.span.file.path.startswith("<")
+            ]
+            out.append(lsp.Diagnostic(
+                range=_range(d.span), message=message, severity=_SEVERITY[d.severity], code=d.code, source="rcsc",
+                code_description=lsp.CodeDescription(href=codes.help_uri(d.code)) if d.code in codes.CODES else None,
+                related_information=related or None,
+            ))
+        self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri=uri, diagnostics=out, version=doc.version))
+        return out
+
+    def schedule(self, uri: str, delay: float) -> None:
+        """Check `uri` after `delay` seconds unless another edit comes first."""
+        task = self.pending.pop(uri, None)
+        if task is not None:
+            task.cancel()
+
+        async def later() -> None:
+            await asyncio.sleep(delay)
+            self.pending.pop(uri, None)
+            self.check(uri)
+
+        self.pending[uri] = asyncio.ensure_future(later())
+
+    # -- lookups ---------------------------------------------------------------
+
+    def symbol_at(self, uri: str, pos: lsp.Position) -> tuple[symbols.Symbol | None, SourceFile, int]:
+        if uri not in self.indexes:
+            self.check(uri)
+        source = self.sources[uri]
+        doc = self.workspace.get_text_document(uri)
+        if source.text != doc.source.replace("\r\n", "\n"):
+            self.check(uri)  # the index is older than the text: renew it
+            source = self.sources[uri]
+        offset = _offset(source, pos)
+        return symbols.lookup(self.indexes[uri], source, offset), source, offset
+
+
+def make_server() -> RcsServer:
+    server = RcsServer()
+
+    @server.feature(lsp.TEXT_DOCUMENT_DID_OPEN)
+    def did_open(ls: RcsServer, params: lsp.DidOpenTextDocumentParams) -> None:
+        ls.check(params.text_document.uri)
+
+    @server.feature(lsp.TEXT_DOCUMENT_DID_CHANGE)
+    def did_change(ls: RcsServer, params: lsp.DidChangeTextDocumentParams) -> None:
+        ls.schedule(params.text_document.uri, DEBOUNCE_SECONDS)
+
+    @server.feature(lsp.TEXT_DOCUMENT_DID_SAVE)
+    def did_save(ls: RcsServer, params: lsp.DidSaveTextDocumentParams) -> None:
+        ls.schedule(params.text_document.uri, 0)
+
+    @server.feature(lsp.TEXT_DOCUMENT_DID_CLOSE)
+    def did_close(ls: RcsServer, params: lsp.DidCloseTextDocumentParams) -> None:
+        uri = params.text_document.uri
+        task = ls.pending.pop(uri, None)
+        if task is not None:
+            task.cancel()
+        ls.indexes.pop(uri, None)
+        ls.sources.pop(uri, None)
+        ls.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri=uri, diagnostics=[]))
+
+    @server.feature(lsp.TEXT_DOCUMENT_HOVER)
+    def hover(ls: RcsServer, params: lsp.HoverParams) -> lsp.Hover | None:
+        sym, source, offset = ls.symbol_at(params.text_document.uri, params.position)
+        word = symbols.word_at(source, offset)
+        if word is not None and symbols.CODE_RE.fullmatch(word[0]) and word[0] in codes.CODES:
+            text = codes.explain(word[0]) or ""
+            return lsp.Hover(contents=lsp.MarkupContent(kind=lsp.MarkupKind.Markdown, value=text),
+                             range=_range(Span(source, word[1], word[2])))
+        if sym is None or word is None:
+            return None
+        return lsp.Hover(contents=lsp.MarkupContent(kind=lsp.MarkupKind.Markdown, value=symbols.hover_text(sym)),
+                         range=_range(Span(source, word[1], word[2])))
+
+    @server.feature(lsp.TEXT_DOCUMENT_DEFINITION)
+    def definition(ls: RcsServer, params: lsp.DefinitionParams) -> lsp.Location | None:
+        sym, _, _ = ls.symbol_at(params.text_document.uri, params.position)
+        if sym is None or sym.span.file.path.startswith("<"):
+            return None
+        return lsp.Location(uri=path_to_uri(sym.span.file.path), range=_range(sym.span))
+
+    @server.feature(lsp.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
+    def document_symbol(ls: RcsServer, params: lsp.DocumentSymbolParams) -> list[lsp.DocumentSymbol]:
+        uri = params.text_document.uri
+        if uri not in ls.indexes:
+            ls.check(uri)
+        path = ls.sources[uri].path
+        return [_doc_symbol(s) for s in ls.indexes[uri].top.get(path, [])]
+
+    @server.feature(lsp.TEXT_DOCUMENT_COMPLETION)
+    def completion(ls: RcsServer, params: lsp.CompletionParams) -> lsp.CompletionList:
+        uri = params.text_document.uri
+        if uri not in ls.indexes:
+            ls.check(uri)
+        idx = ls.indexes[uri]
+        items = {}
+        for name, sym in idx.globals.items():
+            items[name] = lsp.CompletionItem(label=name, kind=lsp.CompletionItemKind.Variable, detail=sym.detail)
+        source = ls.sources[uri]
+        controller, _ = symbols._enclosing(idx, source.path, _offset(source, params.position))
+        for name, sym in idx.members.get(controller or "", {}).items():
+            if not name.startswith("plan "):
+                items[name] = lsp.CompletionItem(label=name, kind=lsp.CompletionItemKind.Field, detail=sym.detail)
+        return lsp.CompletionList(is_incomplete=False, items=[items[k] for k in sorted(items)])
+
+    @server.feature(lsp.TEXT_DOCUMENT_FORMATTING)
+    def formatting(ls: RcsServer, params: lsp.DocumentFormattingParams) -> list[lsp.TextEdit] | None:
+        doc = ls.workspace.get_text_document(params.text_document.uri)
+        formatted, _ = fmt.format_source(uri_to_path(doc.uri), doc.source)
+        if formatted is None or formatted == doc.source:
+            return [] if formatted is not None else None
+        lines = doc.source.split("\n")
+        end = lsp.Position(line=len(lines) - 1, character=_utf16_len(lines[-1]))
+        return [lsp.TextEdit(range=lsp.Range(start=lsp.Position(line=0, character=0), end=end), new_text=formatted)]
+
+    return server
+
+
+def _doc_symbol(sym: symbols.Symbol) -> lsp.DocumentSymbol:
+    return lsp.DocumentSymbol(
+        name=sym.name, kind=_KIND.get(sym.kind, lsp.SymbolKind.Variable), detail=sym.detail,
+        range=_range(sym.decl), selection_range=_range(sym.span),
+        children=[_doc_symbol(c) for c in sym.children] or None,
+    )
+
+
+def main() -> int:
+    make_server().start_io()
+    return 0

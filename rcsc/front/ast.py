@@ -1,0 +1,302 @@
+"""The abstract syntax tree: what the engineer wrote, with a span on every node.
+
+The tree mirrors the text closely (no name resolution, no types); `rcsc.semantics.sema`
+turns it into the checked design model of `rcsc.semantics.model`.  Nodes have slots
+(no per-instance dictionary): a large design has millions of them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from rcsc.front.source import Span
+
+
+class _Slots:
+    """The root of the node classes: a slot for the nesting depth the parser
+    records on expressions and statements (see `rcsc.front.parse.MAX_NESTING`)."""
+
+    __slots__ = ("depth",)
+
+
+@dataclass(slots=True)
+class Node(_Slots):
+    span: Span
+
+
+@dataclass(slots=True)
+class Ident(Node):
+    """A name together with the span of just that name."""
+
+    name: str
+
+
+# ---- expressions -------------------------------------------------------------
+
+
+@dataclass(slots=True)
+class Expr(Node):
+    pass
+
+
+@dataclass(slots=True)
+class IntLit(Expr):
+    value: int
+
+
+@dataclass(slots=True)
+class FloatLit(Expr):
+    value: float
+
+
+@dataclass(slots=True)
+class BoolLit(Expr):
+    value: bool
+
+
+@dataclass(slots=True)
+class DurationLit(Expr):
+    nanos: int
+    text: str
+
+
+@dataclass(slots=True)
+class Name(Expr):
+    name: str
+
+
+@dataclass(slots=True)
+class Attr(Expr):
+    obj: Expr
+    attr: Ident
+
+
+@dataclass(slots=True)
+class Arg(Node):
+    name: Ident | None
+    value: Expr
+
+
+@dataclass(slots=True)
+class Call(Expr):
+    func: Ident
+    args: list[Arg]
+
+
+@dataclass(slots=True)
+class Unary(Expr):
+    op: str  # "-" or "not"
+    operand: Expr
+
+
+@dataclass(slots=True)
+class Binary(Expr):
+    op: str  # + - * / % == != < <= > >= and or
+    left: Expr
+    right: Expr
+    op_span: Span
+
+
+@dataclass(slots=True)
+class IfExpr(Expr):
+    cond: Expr
+    then: Expr
+    else_: Expr
+
+
+# ---- statements and jobs -------------------------------------------------------
+
+
+@dataclass(slots=True)
+class Stmt(Node):
+    pass
+
+
+@dataclass(slots=True)
+class Assign(Stmt):
+    target: list[Ident]  # a.b.c
+    op: str  # = += -= *=
+    value: Expr
+
+
+@dataclass(slots=True)
+class CallStmt(Stmt):
+    call: Call
+
+
+@dataclass(slots=True)
+class Command(Stmt):
+    sub: Ident
+    verb: Ident
+    args: list[Arg]
+
+
+@dataclass(slots=True)
+class Report(Stmt):
+    status: Ident
+
+
+@dataclass(slots=True)
+class If(Stmt):
+    branches: list[tuple[Expr, list[Stmt]]]
+    else_body: list[Stmt] | None
+
+
+# ---- declarations --------------------------------------------------------------
+
+
+@dataclass(slots=True)
+class TypeRef(Node):
+    name: Ident
+    lo: Expr | None = None
+    hi: Expr | None = None
+
+
+@dataclass(slots=True)
+class Param(Node):
+    name: Ident
+    type: TypeRef
+
+
+@dataclass(slots=True)
+class Import(Node):
+    target: str  # "std.math" or a relative path
+    is_file: bool
+
+
+@dataclass(slots=True)
+class Const(Node):
+    name: Ident
+    type: TypeRef
+    value: Expr
+
+
+@dataclass(slots=True)
+class Enum(Node):
+    name: Ident
+    members: list[Ident]
+
+
+@dataclass(slots=True)
+class Record(Node):
+    name: Ident
+    fields: list[Param]
+
+
+@dataclass(slots=True)
+class GmVar(Node):
+    name: Ident
+    type: TypeRef
+    init: Expr | None
+    from_env: bool
+    to_env: bool = False  # `to env`: an output the environment reads (an actuator)
+
+
+@dataclass(slots=True)
+class Function(Node):
+    name: Ident
+    params: list[Param]
+    ret: TypeRef
+    body: Expr
+
+
+@dataclass(slots=True)
+class Extern(Node):
+    name: Ident
+    params: list[Param]
+    ret: TypeRef
+    budget: DurationLit
+
+
+@dataclass(slots=True)
+class Verb(Node):
+    name: Ident
+    params: list[Param]
+
+
+@dataclass(slots=True)
+class VerbSet(Node):
+    name: Ident
+    verbs: list[Verb]
+
+
+@dataclass(slots=True)
+class StatePat(Node):
+    kind: str  # "new", "any", "named"
+    name: str | None = None
+
+
+@dataclass(slots=True)
+class NextState(Node):
+    kind: str  # "named", "done", "error", "same", "new"
+    name: str | None = None
+    code: Expr | None = None
+
+
+@dataclass(slots=True)
+class Rule(Node):
+    label: Ident
+    guard: Expr | None  # None: the `otherwise` rule of its state
+    guard_span: Span
+    state: StatePat
+    next: NextState
+    jobs: list[Stmt]
+
+
+@dataclass(slots=True)
+class Plan(Node):
+    name: Ident
+    continuous: bool
+    rules: list[Rule]
+    modifiers: list[Ident] = field(default_factory=list)
+
+
+@dataclass(slots=True)
+class Decl(Node):
+    """A named, typed member of a controller (status field or local)."""
+
+    name: Ident
+    type: TypeRef
+    init: Expr
+
+
+@dataclass(slots=True)
+class NameList(Node):
+    names: list[Ident]
+
+
+@dataclass(slots=True)
+class Controller(Node):
+    name: Ident
+    simulator: bool
+    level: list[tuple[int, Span]] = field(default_factory=list)
+    budget: list[DurationLit] = field(default_factory=list)
+    period: list[DurationLit] = field(default_factory=list)
+    subordinates: list[NameList] = field(default_factory=list)
+    reads: list[NameList] = field(default_factory=list)
+    writes: list[NameList] = field(default_factory=list)
+    verbs: list[Verb] = field(default_factory=list)
+    verb_sets: list[Ident] = field(default_factory=list)
+    reports: list[NameList] = field(default_factory=list)
+    status_fields: list[Decl] = field(default_factory=list)
+    locals: list[Decl] = field(default_factory=list)
+    pre: list[tuple[Span, list[Stmt]]] = field(default_factory=list)
+    post: list[tuple[Span, list[Stmt]]] = field(default_factory=list)
+    plans: list[Plan] = field(default_factory=list)
+
+
+@dataclass(slots=True)
+class Cpu(Node):
+    name: Ident
+    heartbeat: list[DurationLit] = field(default_factory=list)
+    overhead: list[DurationLit] = field(default_factory=list)
+    schedule: list[NameList] = field(default_factory=list)
+
+
+@dataclass(slots=True)
+class File(Node):
+    """One parsed source file: `design NAME` or `module a.b`, then items."""
+
+    kind: str  # "design", "module" or "" (no header)
+    name: Ident | None
+    items: list[Node]

@@ -1,0 +1,191 @@
+"""Loading a design: the root file and everything it imports (`path_to_files`).
+
+Local imports are confined to the design's folder (the folder of the root
+file): absolute paths and paths that climb out of it are refused (E0004).
+Standard-library modules come from the installed `rcsc.stdlib` package.  Each
+file is loaded once, however often it is imported, so import cycles are
+harmless.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from importlib import resources
+
+from rcsc.outputs import safeio
+from rcsc.front import ast
+from rcsc.diagnostics import Diagnostics
+from rcsc.front.parse import text_to_ast
+from rcsc.front.source import SourceFile, Span, skip_trivia
+
+
+class InputError(Exception):
+    """The root file cannot be read: a usage/I-O error (exit code 2), not a finding."""
+
+
+@dataclass
+class LoadedFile:
+    source: SourceFile
+    tree: ast.File | None
+    module: str  # module name ("" for the root design or header-less files)
+    is_root: bool = False
+
+
+def _read(path: str) -> str:
+    try:
+        data = safeio.read_input(path)
+    except safeio.InputError as exc:
+        raise InputError(str(exc)) from exc
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: not UTF-8 text (byte {exc.start})") from exc
+
+
+def stdlib_path(module: str):
+    """The resource of a stdlib module `std.math` -> stdlib/std/math.rcs, or None."""
+    parts = module.split(".")
+    if not all(p.isidentifier() for p in parts):
+        return None
+    node = resources.files("rcsc.stdlib")
+    for p in parts[:-1]:
+        node = node.joinpath(p)
+    node = node.joinpath(parts[-1] + ".rcs")
+    return node if node.is_file() else None
+
+
+def path_to_files(
+    path: str, diags: Diagnostics, as_module: bool = False, overlay: dict[str, str] | None = None
+) -> list[LoadedFile]:
+    """Read and parse the root design file and, transitively, its imports.
+
+    With `as_module`, the root may also be a `module` (checked on its own,
+    as `rcsc check` does for a module that no design imports).  `overlay`
+    maps real paths to texts that replace the files' contents (the unsaved
+    documents of an editor, for the language server)."""
+    overlay = overlay or {}
+    try:
+        text = overlay.get(os.path.realpath(path))
+        if text is None:
+            text = _read(path)
+    except FileNotFoundError as exc:
+        raise InputError(f"{path}: no such file") from exc
+    except IsADirectoryError as exc:
+        raise InputError(f"{path}: is a folder, not a design file") from exc
+    except OSError as exc:
+        raise InputError(f"{path}: {exc.strerror or exc}") from exc
+
+    root_dir = os.path.realpath(os.path.dirname(os.path.abspath(path)))
+    root = SourceFile(path, text)
+    files: list[LoadedFile] = []
+    seen: set[str] = set()
+
+    def visit(source: SourceFile, real: str, is_root: bool, display_dir: str | None) -> None:
+        seen.add(real)
+        tree = text_to_ast(source, diags)
+        module = ""
+        if tree is not None:
+            module = tree.name.name if tree.name is not None and tree.kind == "module" else ""
+            if not (is_root and as_module and tree.kind == "module"):
+                _check_header(tree, source, is_root, diags)
+        files.append(LoadedFile(source, tree, module, is_root))
+        if tree is None:
+            return
+        for item in tree.items:
+            if isinstance(item, ast.Import):
+                if item.is_file:
+                    if display_dir is None:
+                        diags.add("E0004", _target_span(item), "a standard-library module cannot import a local file", "local import in the standard library")
+                        continue
+                    _import_file(item, real, display_dir)
+                else:
+                    _import_std(item)
+
+    def _import_file(item: ast.Import, importer_real: str, display_dir: str) -> None:
+        target = item.target
+        if os.path.isabs(target) or target.startswith("~"):
+            diags.add("E0004", _target_span(item), "import of an absolute path", "absolute path").with_help(
+                "import files by a path relative to the importing file, inside the design folder"
+            )
+            return
+        real = os.path.realpath(os.path.join(os.path.dirname(importer_real), target))
+        if os.path.commonpath([real, root_dir]) != root_dir:
+            diags.add("E0004", _target_span(item), f"import of `{target}` leaves the design folder", "outside the design folder").with_note(
+                f"the design folder is `{os.path.dirname(path) or '.'}`"
+            )
+            return
+        if real in seen:
+            return
+        try:
+            text = overlay[real] if real in overlay else _read(real)
+        except InputError as exc:
+            diags.add("E0003", _target_span(item), f"cannot read `{target}`: {exc}", "imported here")
+            return
+        except OSError as exc:
+            reason = (exc.strerror or "no such file").lower()
+            diags.add("E0003", _target_span(item), f"cannot read `{target}`: {reason}", "imported here")
+            return
+        display = os.path.normpath(os.path.join(display_dir, target))
+        visit(SourceFile(display, text), real, False, os.path.dirname(display))
+
+    def _import_std(item: ast.Import) -> None:
+        res = stdlib_path(item.target)
+        if res is None:
+            diags.add("E0005", _target_span(item), f"no standard-library module `{item.target}`", "unknown module").with_note(
+                "the standard library has: " + ", ".join(stdlib_modules())
+            )
+            return
+        key = "<stdlib>/" + item.target
+        if key in seen:
+            return
+        text = res.read_text(encoding="utf-8")
+        visit(SourceFile("<stdlib>/" + item.target.replace(".", "/") + ".rcs", text), key, False, None)
+
+    visit(root, os.path.realpath(path), True, os.path.dirname(path))
+    return files
+
+
+def stdlib_modules() -> list[str]:
+    """Names of the standard-library modules, sorted."""
+    out = []
+    base = resources.files("rcsc.stdlib")
+    for pkg in sorted(base.iterdir(), key=lambda p: p.name):
+        if pkg.is_dir() and not pkg.name.startswith(("_", ".")):
+            for f in sorted(pkg.iterdir(), key=lambda p: p.name):
+                if f.name.endswith(".rcs"):
+                    out.append(f"{pkg.name}.{f.name[:-4]}")
+    return out
+
+
+def _check_header(tree: ast.File, source: SourceFile, is_root: bool, diags: Diagnostics) -> None:
+    if is_root and tree.kind != "design":
+        span = tree.name.span if tree.name is not None else _first_token_span(source)
+        diags.add("E0006", span, "a design file must begin with `design NAME`", "expected `design NAME` here").with_help(
+            "start the file with a line such as `design submarine`"
+        )
+    elif not is_root and tree.kind == "design":
+        assert tree.name is not None
+        diags.add("E0006", tree.name.span, "an imported file must be a `module`, not a `design`", "second design").with_help(
+            "a design has exactly one `design` file; begin imported files with `module NAME`"
+        )
+
+
+def _target_span(item: ast.Import) -> Span:
+    """The span of just the imported path or module name (not the `import` keyword)."""
+    text, start = item.span.text, item.span.start
+    if item.is_file:
+        # STRING is the last token and cannot contain a quote.
+        i = text.rfind('"', 0, max(0, len(text) - 1))
+        return Span(item.span.file, start + i, item.span.end) if i >= 0 else item.span
+    i = skip_trivia(text, len("import")) if text.startswith("import") else 0
+    return Span(item.span.file, start + i, item.span.end)
+
+
+def _first_token_span(source: SourceFile) -> Span:
+    text = source.text
+    i = skip_trivia(text, 0)
+    j = i
+    while j < len(text) and not text[j].isspace():
+        j += 1
+    return Span(source, i, j)

@@ -1,0 +1,436 @@
+"""The checked design model: the IR that the checks, the simulator and every backend consume.
+
+`rcsc.semantics.sema.ast_to_model` builds it from the AST.  Everything in it is resolved
+and typed: a name in an expression is a `Ref` that says what it refers to
+(Global Memory, local, status field, command parameter, constant, function
+parameter), calls know their callee, command arguments are in parameter
+order, constant expressions are folded to values.  Every node keeps the span
+of the text it came from, so later stages can point at it.
+
+Containers are dicts in declaration order; the order is part of the design
+(rule order, schedule order) and keeps every output deterministic.
+See docs/model.md for a guided tour.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Union
+
+from rcsc.front.source import Span
+from rcsc.semantics.types import Type
+
+# Status values, numbered as in NIST rcslib; extra values are numbered after these.
+UNINITIALIZED, DONE, EXEC, ERROR = -1, 1, 2, 3
+FIRST_EXTRA_STATUS = 4
+
+Value = Union[bool, int, float, str, dict]  # enums are member names; records dicts
+
+
+# ---- expressions -------------------------------------------------------------
+
+
+class _Compiled:
+    """The root of the expression classes: a slot where `rcsc.semantics.evaluate` keeps
+    an expression's compiled closure."""
+
+    __slots__ = ("_compiled",)
+
+
+@dataclass(slots=True)
+class Expr(_Compiled):
+    span: Span
+    type: Type
+
+
+@dataclass(slots=True)
+class Const(Expr):
+    """A literal or a folded constant expression. `name` keeps a constant's name for readable code."""
+
+    value: Value
+    name: str | None = None
+
+
+@dataclass(slots=True)
+class Ref(Expr):
+    """A named value. kind: gm | local | status | param | arg (function argument)."""
+
+    kind: str
+    name: str
+
+
+@dataclass(slots=True)
+class InState(Expr):
+    """Time since the plan entered its current state (a duration)."""
+
+
+@dataclass(slots=True)
+class Age(Expr):
+    """`age(V)` of a Global Memory variable V: the reader's release instant minus
+    the instant the value it read became visible (a duration).
+
+    `age(SUB)` of a subordinate is the `SubView` with attr `age` (the same as `SUB.age`).
+    """
+
+    name: str
+
+
+@dataclass(slots=True)
+class SubView(Expr):
+    """The supervisor's view of a subordinate's status buffer.
+
+    attr: done | error | executing | error_code | age | status (an extra status
+    value, in `value`) | field (a status field, in `value`).
+    """
+
+    sub: str
+    attr: str
+    value: str | None = None
+
+
+@dataclass(slots=True)
+class Field(Expr):
+    obj: Expr
+    name: str
+
+
+@dataclass(slots=True)
+class Call(Expr):
+    """kind: fn | extern | builtin (abs/min/max) | convert (i32/i64/u32/f64) | record."""
+
+    kind: str
+    func: str
+    args: list[Expr]
+
+
+@dataclass(slots=True)
+class Unary(Expr):
+    op: str  # "-" or "not"
+    operand: Expr
+
+
+@dataclass(slots=True)
+class Binary(Expr):
+    op: str  # + - * / % == != < <= > >= and or
+    left: Expr
+    right: Expr
+
+
+@dataclass(slots=True)
+class IfExpr(Expr):
+    cond: Expr
+    then: Expr
+    else_: Expr
+
+
+# ---- statements and jobs -------------------------------------------------------
+
+
+@dataclass(slots=True)
+class Stmt:
+    span: Span
+
+
+@dataclass(slots=True)
+class LValue:
+    span: Span
+    kind: str  # gm | local | status
+    name: str
+    path: list[str]  # record fields below the variable
+    type: Type
+
+
+@dataclass(slots=True)
+class Assign(Stmt):
+    target: LValue
+    op: str  # = += -= *=
+    value: Expr
+
+
+@dataclass(slots=True)
+class CallStmt(Stmt):
+    call: Call
+
+
+@dataclass(slots=True)
+class Command(Stmt):
+    sub: str
+    verb: str
+    args: list[Expr]  # in the verb's parameter order
+    sub_span: Span = None  # type: ignore[assignment]
+
+
+@dataclass(slots=True)
+class Report(Stmt):
+    status: str
+
+
+@dataclass(slots=True)
+class If(Stmt):
+    branches: list[tuple[Expr, list[Stmt]]]
+    else_body: list[Stmt]
+
+
+# ---- declarations --------------------------------------------------------------
+
+
+@dataclass
+class Range:
+    lo: int | float
+    hi: int | float
+
+
+@dataclass
+class Var:
+    """A typed, initialised variable: GM variable, local, status field, parameter."""
+
+    name: str
+    type: Type
+    span: Span
+    init: Value | None = None
+    range: Range | None = None
+    from_env: bool = False  # GM only
+    to_env: bool = False  # GM only: the environment reads it (an actuator output)
+
+
+@dataclass
+class ConstDef:
+    name: str
+    type: Type
+    value: Value
+    span: Span
+
+
+@dataclass
+class Function:
+    name: str
+    params: list[Var]
+    ret: Type
+    span: Span
+    body: Expr | None = None  # None for externs
+    extern: bool = False
+    budget_ns: int = 0
+    module: str = ""  # the design or module that declares it
+
+
+@dataclass
+class Verb:
+    name: str
+    params: list[Var]
+    span: Span
+    # Where the controller declares it: the verb itself, or its `verbs SET` line.
+    use_span: Span | None = None
+
+    def param(self, name: str) -> Var | None:
+        return next((p for p in self.params if p.name == name), None)
+
+
+@dataclass
+class StateRef:
+    """`new`, `*` (any) or a named state; as a next state also done/error/same."""
+
+    kind: str  # new | any | named | done | error | same
+    name: str | None
+    span: Span
+    code: int = 0  # error code for kind == error
+
+    def __str__(self) -> str:
+        return {"new": "new", "any": "*", "done": "done", "same": "*"}.get(
+            self.kind, f"error({self.code})" if self.kind == "error" else str(self.name)
+        )
+
+
+@dataclass
+class Rule:
+    index: int  # position in the plan, from 0
+    label: str
+    span: Span
+    label_span: Span
+    state: StateRef
+    guard: Expr | None  # None for `otherwise`
+    guard_span: Span
+    next: StateRef
+    jobs: list[Stmt]
+
+    @property
+    def otherwise(self) -> bool:
+        return self.guard is None
+
+    @property
+    def line(self) -> int:
+        return self.span.line
+
+
+@dataclass
+class Plan:
+    verb: str
+    span: Span
+    name_span: Span
+    continuous: bool
+    rules: list[Rule]
+    # `plan X ordered`: the table is prioritized on purpose (first match wins
+    # by design), so the guard analysis does not report overlapping rules.
+    ordered: bool = False
+
+    @property
+    def states(self) -> list[str]:
+        """Named states in order of first appearance."""
+        seen: dict[str, None] = {}
+        for r in self.rules:
+            for ref in (r.state, r.next):
+                if ref.kind == "named" and ref.name is not None:
+                    seen.setdefault(ref.name, None)
+        return list(seen)
+
+
+@dataclass
+class NameUse:
+    name: str
+    span: Span
+
+
+@dataclass
+class Controller:
+    name: str
+    span: Span
+    name_span: Span
+    simulator: bool
+    level: int
+    budget_ns: int
+    subordinates: list[NameUse] = field(default_factory=list)
+    reads: list[NameUse] = field(default_factory=list)
+    writes: list[NameUse] = field(default_factory=list)
+    verbs: dict[str, Verb] = field(default_factory=dict)
+    statuses: dict[str, int] = field(default_factory=dict)  # extra status values -> number
+    status_spans: dict[str, Span] = field(default_factory=dict)
+    status_fields: dict[str, Var] = field(default_factory=dict)
+    locals: dict[str, Var] = field(default_factory=dict)
+    pre: list[Stmt] = field(default_factory=list)
+    post: list[Stmt] = field(default_factory=list)
+    plans: dict[str, Plan] = field(default_factory=dict)
+    level_span: Span | None = None
+    budget_span: Span | None = None
+    supervisor: str | None = None  # filled in by the hierarchy check
+    cpu: str | None = None  # filled in by the timing check
+    # `period D` as written (0: not written), and the rate the timing check
+    # derives from it: the controller steps on every `divider`-th cycle of its
+    # CPU (cycles 1, 1 + divider, ...), so its period is divider * heartbeat.
+    declared_period_ns: int = 0
+    period_span: Span | None = None
+    divider: int = 1  # filled in by the timing check
+    period_ns: int = 0  # filled in by the timing check
+
+
+@dataclass
+class Crossing:
+    """A buffer written on one CPU and read on others (each reader keeps its own copy).
+
+    kind: gm (a Global Memory variable), cmd (the command buffer of controller
+    `name`, written by its supervisor) or status (the status buffer of
+    controller `name`, read by its supervisor).
+    """
+
+    kind: str
+    name: str
+    writer_cpu: str
+    reader_cpus: list[str]
+
+
+@dataclass
+class Cpu:
+    name: str
+    span: Span
+    name_span: Span
+    heartbeat_ns: int
+    overhead_ns: int
+    schedule: list[NameUse]
+    heartbeat_span: Span | None = None
+
+
+@dataclass
+class Design:
+    name: str
+    span: Span
+    enums: dict[str, Type] = field(default_factory=dict)
+    records: dict[str, Type] = field(default_factory=dict)
+    consts: dict[str, ConstDef] = field(default_factory=dict)
+    gm: dict[str, Var] = field(default_factory=dict)
+    functions: dict[str, Function] = field(default_factory=dict)
+    controllers: dict[str, Controller] = field(default_factory=dict)
+    cpus: dict[str, Cpu] = field(default_factory=dict)
+    files: list[str] = field(default_factory=list)
+    # Filled in by the timing check: GM variables in declaration order, then
+    # command and status buffers in controller declaration order.
+    crossings: list[Crossing] = field(default_factory=list)
+
+    @property
+    def base_tick_ns(self) -> int:
+        """The shortest heartbeat: the unit of scenario ticks (0 without CPUs)."""
+        beats = [c.heartbeat_ns for c in self.cpus.values() if c.heartbeat_ns > 0]
+        return min(beats) if beats else 0
+
+    def supervisor_of(self, name: str) -> str | None:
+        return self.controllers[name].supervisor
+
+
+# ---- walking ---------------------------------------------------------------------
+
+
+def walk_expr(e: Expr):
+    """Every sub-expression of `e`, `e` first (pre-order, left to right).
+
+    Iterative: nested generators would cost a step per level for every
+    node, which is quadratic in long `a and b and c ...` chains.
+    """
+    stack = [e]
+    pop, push = stack.pop, stack.append
+    while stack:
+        x = pop()
+        yield x
+        if isinstance(x, Binary):
+            push(x.right)
+            push(x.left)
+        elif isinstance(x, Field):
+            push(x.obj)
+        elif isinstance(x, Call):
+            stack.extend(reversed(x.args))
+        elif isinstance(x, Unary):
+            push(x.operand)
+        elif isinstance(x, IfExpr):
+            push(x.else_)
+            push(x.then)
+            push(x.cond)
+
+
+def walk_stmts(stmts: list[Stmt]):
+    """Every statement of a block, nested ones included, in order."""
+    for s in stmts:
+        yield s
+        if isinstance(s, If):
+            for _, body in s.branches:
+                yield from walk_stmts(body)
+            yield from walk_stmts(s.else_body)
+
+
+def stmt_exprs(s: Stmt):
+    """The expressions directly held by one statement."""
+    if isinstance(s, Assign):
+        yield s.value
+    elif isinstance(s, CallStmt):
+        yield s.call
+    elif isinstance(s, Command):
+        yield from s.args
+    elif isinstance(s, If):
+        for cond, _ in s.branches:
+            yield cond
+
+
+def controller_exprs(c: Controller) -> list[Expr]:
+    """The top-level expressions of a controller: pre, post and jobs in order, then the rules' guards."""
+    exprs: list[Expr] = []
+    for stmts in [c.pre, c.post] + [r.jobs for p in c.plans.values() for r in p.rules]:
+        for s in walk_stmts(stmts):
+            exprs.extend(stmt_exprs(s))
+    for p in c.plans.values():
+        exprs.extend(r.guard for r in p.rules if r.guard is not None)
+    return exprs

@@ -1,0 +1,486 @@
+"""Semantic analysis: the loaded files' ASTs to the checked design model (`ast_to_model`).
+
+It runs in passes so that declaration order never matters: (1) collect every
+top-level name, (2) resolve types, (3) constants, functions' signatures,
+verb sets and Global Memory, (4) controller interfaces (verbs, statuses,
+fields, locals), (5) bodies: function bodies, pre/post blocks and plans, and
+(6) CPUs.  Problems are collected as diagnostics; the model is always built
+(with placeholders where something was wrong) so that the structural checks
+can still run and report their own findings in the same run.
+"""
+
+from __future__ import annotations
+
+import networkx as nx
+
+from rcsc.front import ast
+from rcsc.semantics import model as m
+from rcsc.diagnostics import Diagnostics
+from rcsc.front.loader import LoadedFile
+from rcsc.front.source import Span
+from rcsc.semantics.typecheck import BUILTIN_FUNCS, CONVERSIONS, Checker, Globals, Scope
+from rcsc.semantics.types import BUILTIN_TYPES, DURATION, ERROR, I32, EnumType, ErrorType, RecordType, Type
+
+_RESERVED = set(BUILTIN_TYPES) | set(BUILTIN_FUNCS) | CONVERSIONS | {"cmd", "in_state", "seconds"}
+
+
+class _Sema:
+    def __init__(self, files: list[LoadedFile], diags: Diagnostics) -> None:
+        self.files = files
+        self.d = diags
+        self.g = Globals()
+        self.g.types.update(BUILTIN_TYPES)
+        self.g.resolve_const = self._resolve_const_lazily
+        self.g.resolve_fn = self._fn_body
+        self.fn_busy: set[str] = set()
+        self.decls: dict[str, ast.Node] = {}
+        self.const_ast: dict[str, ast.Const] = {}
+        self.const_busy: set[str] = set()
+        self.verbsets: dict[str, ast.VerbSet] = {}
+        self.record_ast: dict[str, ast.Record] = {}
+        self.record_busy: set[str] = set()
+
+    # ---- pass 1: names ---------------------------------------------------------
+
+    def collect(self) -> None:
+        for f in self.files:
+            if f.tree is None:
+                continue
+            for item in f.tree.items:
+                name = getattr(item, "name", None)
+                if not isinstance(name, ast.Ident):
+                    continue
+                if name.name in _RESERVED:
+                    self.d.add("E0101", name.span, f"`{name.name}` is a built-in name and cannot be redefined", "built-in name")
+                    continue
+                prev = self.decls.get(name.name)
+                if prev is not None:
+                    again, first = name, prev.name  # type: ignore[attr-defined]
+                    if again.span.file.path.startswith("<stdlib>/") and not first.span.file.path.startswith("<stdlib>/"):
+                        # Blame the design's own declaration, not the standard library's.
+                        again, first = first, again
+                    diag = self.d.add("E0101", again.span, f"`{name.name}` is defined more than once", "defined again here")
+                    diag.with_label(first.span, "first defined here")
+                    continue
+                self.decls[name.name] = item
+
+    # ---- pass 2: types ---------------------------------------------------------
+
+    def types(self) -> None:
+        for name, item in self.decls.items():
+            if isinstance(item, ast.Enum):
+                members: list[str] = []
+                for mem in item.members:
+                    if mem.name in members:
+                        self.d.add("E0101", mem.span, f"enum member `{mem.name}` is defined more than once", "repeated member")
+                    else:
+                        members.append(mem.name)
+                if not members:
+                    self.d.add("E0101", item.name.span, f"enum `{name}` has no members", "empty enum")
+                self.g.types[name] = EnumType(name, tuple(members), item.span)
+            elif isinstance(item, ast.Record):
+                self.record_ast[name] = item
+        for name in self.record_ast:
+            self._record(name)
+
+    def _record(self, name: str) -> Type:
+        if name in self.g.types:
+            return self.g.types[name]
+        item = self.record_ast[name]
+        if name in self.record_busy:
+            self.d.add("E0102", item.name.span, f"record `{name}` contains itself", "recursive record")
+            return ERROR
+        self.record_busy.add(name)
+        fields: list[tuple[str, Type]] = []
+        for f in item.fields:
+            if any(f.name.name == n for n, _ in fields):
+                self.d.add("E0101", f.name.span, f"field `{f.name.name}` is defined more than once", "repeated field")
+                continue
+            fields.append((f.name.name, self.type_ref(f.type)))
+        self.record_busy.discard(name)
+        t = RecordType(name, tuple(fields), item.span)
+        self.g.types[name] = t
+        return t
+
+    def type_ref(self, ref: ast.TypeRef) -> Type:
+        n = ref.name.name
+        if n in self.g.types:
+            return self.g.types[n]
+        if n in self.record_ast:
+            return self._record(n)
+        diag = self.d.add("E0102", ref.name.span, f"unknown type `{n}`", "not a type")
+        diag.with_note("types: bool, i32, i64, u32, f64, duration, and declared enums and records")
+        return ERROR
+
+    def range_of(self, ref: ast.TypeRef, t: Type, checker: Checker) -> m.Range | None:
+        if ref.lo is None or ref.hi is None:
+            return None
+        if not t.is_numeric and t != DURATION:
+            if not isinstance(t, ErrorType):
+                self.d.add("E0206", ref.span, f"a range needs a numeric type or `duration`, not `{t}`", "not numeric")
+            return None
+        lo = checker.constant(ref.lo, t, "a range bound")
+        hi = checker.constant(ref.hi, t, "a range bound")
+        if lo is None or hi is None:
+            return None
+        if lo.value > hi.value:  # type: ignore[operator]
+            self.d.add("E0206", ref.lo.span.to(ref.hi.span), "empty range: the lower bound is above the upper bound", "empty range")
+            return None
+        return m.Range(lo.value, hi.value)  # type: ignore[arg-type]
+
+    def check_in_range(self, value, rng: m.Range | None, span: Span) -> None:
+        if rng is None or not isinstance(value, (int, float)) or isinstance(value, bool):
+            return
+        if not (rng.lo <= value <= rng.hi):
+            self.d.add("E0206", span, f"value {value} is outside the declared range {rng.lo}..{rng.hi}", "out of range")
+
+    # ---- pass 3: constants, functions, verb sets, Global Memory -----------------
+
+    def _resolve_const_lazily(self, name: str) -> bool:
+        if name in self.g.consts:
+            return True
+        item = self.const_ast.get(name)
+        if item is None:
+            return False
+        if name in self.const_busy:
+            self.d.add("E0204", item.name.span, f"constant `{name}` depends on itself", "circular constant")
+            return True  # a known constant without a value yet: its uses become ERROR, not E0100
+        self.const_busy.add(name)
+        self._const(item)
+        self.const_busy.discard(name)
+        return name in self.g.consts
+
+    def _const(self, item: ast.Const) -> None:
+        t = self.type_ref(item.type)
+        checker = Checker(Scope(self.g, const_only=True), self.d)
+        value = checker.constant(item.value, t, "a constant's value") if not isinstance(t, ErrorType) else None
+        if value is None:
+            self.g.consts[item.name.name] = m.ConstDef(item.name.name, ERROR, 0, item.span)
+            return
+        self.check_in_range(value.value, self.range_of(item.type, t, checker), item.value.span)
+        self.g.consts[item.name.name] = m.ConstDef(item.name.name, t, value.value, item.span)
+
+    def globals_(self) -> None:
+        # Function signatures first: constants may call pure functions.  A
+        # parameter range that needs a constant resolves it lazily.
+        const_checker = Checker(Scope(self.g, const_only=True), self.d)
+        for name, item in self.decls.items():
+            if isinstance(item, ast.Const):
+                self.const_ast[name] = item
+        for name, item in self.decls.items():
+            if isinstance(item, (ast.Function, ast.Extern)):
+                params = self.params(item.params, const_checker)
+                fn = m.Function(name, params, self.type_ref(item.ret), item.span, extern=isinstance(item, ast.Extern))
+                if isinstance(item, ast.Extern):
+                    fn.budget_ns = item.budget.nanos
+                fn.module = item.span.file.path
+                self.g.functions[name] = fn
+        for name in self.const_ast:
+            self._resolve_const_lazily(name)
+        for name, item in self.decls.items():
+            if isinstance(item, ast.VerbSet):
+                self.verbsets[name] = item
+                for i, v in enumerate(item.verbs):
+                    if any(v.name.name == w.name.name for w in item.verbs[:i]):
+                        self.d.add("E0101", v.name.span, f"verb `{v.name.name}` is declared more than once in verb set `{name}`", "repeated verb")
+            elif isinstance(item, ast.GmVar):
+                t = self.type_ref(item.type)
+                var = m.Var(name, t, item.span, from_env=item.from_env, to_env=item.to_env)
+                var.range = self.range_of(item.type, t, const_checker)
+                if item.init is None:
+                    self.d.add("E0402", item.name.span, f"Global Memory variable `{name}` has no initial value", "no initial value").with_help(
+                        f"give it one: `gm {name}: {t} = ...`"
+                    )
+                elif not isinstance(t, ErrorType):
+                    value = const_checker.constant(item.init, t, "an initial value")
+                    if value is not None:
+                        var.init = value.value
+                        self.check_in_range(value.value, var.range, item.init.span)
+                self.g.gm[name] = var
+
+    def params(self, params: list[ast.Param], checker: Checker) -> list[m.Var]:
+        out: list[m.Var] = []
+        for p in params:
+            if any(q.name == p.name.name for q in out):
+                self.d.add("E0101", p.name.span, f"parameter `{p.name.name}` is defined more than once", "repeated parameter")
+                # Keep the slot (typed ERROR) so that calls with the written
+                # number of arguments do not also get E0201.
+                out.append(m.Var(p.name.name, ERROR, p.span))
+                continue
+            t = self.type_ref(p.type)
+            out.append(m.Var(p.name.name, t, p.span, range=self.range_of(p.type, t, checker)))
+        return out
+
+    # ---- pass 4: controller interfaces ------------------------------------------
+
+    def interfaces(self) -> None:
+        for name, item in self.decls.items():
+            if isinstance(item, ast.Controller):
+                self.g.controllers[name] = self.interface(item)
+
+    def interface(self, item: ast.Controller) -> m.Controller:
+        name = item.name.name
+        level, level_span = self._single(item.level, item, "level", lambda v: v[0], lambda v: v[1])
+        budget, budget_span = self._single(item.budget, item, "budget", lambda v: v.nanos, lambda v: v.span)
+        c = m.Controller(name, item.span, item.name.span, item.simulator, level or 0, budget or 0)
+        c.level_span, c.budget_span = level_span, budget_span
+        # `period` is optional (default: every cycle of its CPU); the timing
+        # check relates it to the CPU's heartbeat once the controller is placed.
+        for extra in item.period[1:]:
+            self.d.add("E0209", extra.span, "`period` is given more than once", "repeated `period`")
+        if item.period:
+            c.declared_period_ns, c.period_span = item.period[0].nanos, item.period[0].span
+        c.subordinates = self._names(item.subordinates, "subordinate")
+        c.reads = self._names(item.reads, "read")
+        c.writes = self._names(item.writes, "write")
+        for use in c.reads + c.writes:
+            if use.name not in self.g.gm:
+                diag = self.d.add("E0100", use.span, f"no Global Memory variable named `{use.name}`", "not declared")
+                self.g.poisoned.add(use.name)
+                diag.with_help(f"declare it: `gm {use.name}: TYPE = VALUE`")
+        checker = Checker(Scope(self.g, const_only=True), self.d)
+        verbs = list(item.verbs)
+        uses: list[Span | None] = [None] * len(verbs)
+        used_sets: set[str] = set()
+        for ref in item.verb_sets:
+            vs = self.verbsets.get(ref.name)
+            if vs is None:
+                self.d.add("E0106", ref.span, f"no verb set named `{ref.name}`", "unknown verb set")
+                continue
+            if ref.name in used_sets:  # one finding for the line, not one per verb
+                self.d.add("E0101", ref.span, f"verb set `{ref.name}` is used more than once in `{name}`", "repeated `verbs`")
+                continue
+            used_sets.add(ref.name)
+            for v in vs.verbs:
+                if not any(v.name.name == w.name.name for w in vs.verbs[: vs.verbs.index(v)]):  # repeats: reported once, at the verb set
+                    verbs.append(v)
+                    uses.append(ref.span)
+        for v, use in zip(verbs, uses):
+            if v.name.name in c.verbs:
+                self.d.add("E0101", use or v.name.span, f"verb `{v.name.name}` is declared more than once in `{name}`", "repeated verb")
+                continue
+            verb = m.Verb(v.name.name, self.params(v.params, checker), v.span)
+            verb.use_span = use or v.name.span
+            c.verbs[v.name.name] = verb
+        number = m.FIRST_EXTRA_STATUS
+        for nl in item.reports:
+            for ident in nl.names:
+                if ident.name in c.statuses or ident.name in ("DONE", "EXEC", "ERROR", "UNINITIALIZED"):
+                    self.d.add("E0101", ident.span, f"status value `{ident.name}` is defined more than once", "repeated status value")
+                    continue
+                c.statuses[ident.name] = number
+                c.status_spans[ident.name] = ident.span
+                number += 1
+        for decl, table, what in [(d, c.status_fields, "status field") for d in item.status_fields] + [
+            (d, c.locals, "local") for d in item.locals
+        ]:
+            n = decl.name.name
+            if n in ("cmd", "in_state"):
+                self.d.add("E0101", decl.name.span, f"`{n}` is a built-in name and cannot be redefined", "built-in name")
+                continue
+            if n in c.status_fields or n in c.locals:
+                self.d.add("E0101", decl.name.span, f"`{n}` is defined more than once in `{name}`", f"repeated {what}")
+                continue
+            t = self.type_ref(decl.type)
+            var = m.Var(n, t, decl.span, range=self.range_of(decl.type, t, checker))
+            if not isinstance(t, ErrorType):
+                value = checker.constant(decl.init, t, "an initial value")
+                if value is not None:
+                    var.init = value.value
+                    self.check_in_range(value.value, var.range, decl.init.span)
+            table[n] = var
+        return c
+
+    def _single(self, values, item: ast.Controller, what: str, get, span_of):
+        if not values:
+            self.d.add("E0209", item.name.span, f"controller `{item.name.name}` has no `{what}`", f"no `{what}`").with_help(
+                f"write it in the header: `controller {item.name.name} level 2 budget 1 ms {{`"
+            )
+            return None, None
+        for extra in values[1:]:
+            self.d.add("E0209", span_of(extra), f"`{what}` is given more than once", f"repeated `{what}`")
+        return get(values[0]), span_of(values[0])
+
+    def _names(self, lists: list[ast.NameList], what: str) -> list[m.NameUse]:
+        out: list[m.NameUse] = []
+        for nl in lists:
+            for ident in nl.names:
+                if any(u.name == ident.name for u in out):
+                    self.d.add("E0101", ident.span, f"`{ident.name}` is listed more than once", f"repeated {what}")
+                    continue
+                out.append(m.NameUse(ident.name, ident.span))
+        return out
+
+    # ---- pass 5: bodies ---------------------------------------------------------
+
+    def _fn_body(self, name: str) -> None:
+        """Type-check a function's body (once), on demand or in declaration order."""
+        fn = self.g.functions.get(name)
+        item = self.decls.get(name)
+        if fn is None or fn.body is not None or not isinstance(item, ast.Function) or name in self.fn_busy:
+            return  # a recursive call leaves the body unchecked until the first call returns
+        self.fn_busy.add(name)
+        scope = Scope(self.g, fn_params={p.name: p for p in fn.params}, pure=True)
+        fn.body = Checker(scope, self.d).expect(item.body, fn.ret, f"the result of `{name}`")
+        self.fn_busy.discard(name)
+
+    def bodies(self) -> None:
+        for name, item in self.decls.items():
+            if isinstance(item, ast.Function):
+                self._fn_body(name)
+        self._recursion()
+        for name, item in self.decls.items():
+            if isinstance(item, ast.Controller):
+                self.controller_body(self.g.controllers[name], item)
+
+    def _recursion(self) -> None:
+        graph = nx.DiGraph()
+        for fn in self.g.functions.values():
+            graph.add_node(fn.name)
+            if fn.body is None:
+                continue
+            for e in m.walk_expr(fn.body):
+                if isinstance(e, m.Call) and e.kind == "fn":
+                    graph.add_edge(fn.name, e.func)
+        for cycle in sorted(nx.simple_cycles(graph), key=lambda c: sorted(c)):
+            first = min(cycle)
+            fn = self.g.functions[first]
+            item = self.decls[first]
+            path = " -> ".join(cycle[cycle.index(first):] + cycle[: cycle.index(first)] + [first])
+            self.d.add("E0205", item.name.span, f"function `{first}` is recursive", "calls itself").with_note(  # type: ignore[attr-defined]
+                f"call cycle: {path}"
+            )
+            fn.body = m.Const(fn.span, ERROR, 0)  # never evaluate it
+        # Recursive functions are cut off above, so folding and simulation stay finite.
+
+    def controller_body(self, c: m.Controller, item: ast.Controller) -> None:
+        scope = Scope(self.g, controller=c)
+        checker = Checker(scope, self.d)
+        for _, block in item.pre:
+            c.pre.extend(checker.stmts(block))
+        for _, block in item.post:
+            c.post.extend(checker.stmts(block))
+        for plan in item.plans:
+            verb_name = plan.name.name
+            if verb_name in c.plans:
+                diag = self.d.add("E0512", plan.name.span, f"`{c.name}` has two plans for `{verb_name}`", "second plan")
+                diag.with_label(c.plans[verb_name].name_span, "first plan")
+                continue
+            verb = c.verbs.get(verb_name)
+            if verb is None:
+                diag = self.d.add("E0501", plan.name.span, f"plan `{verb_name}` is for a verb `{c.name}` does not declare", "no such verb")
+                diag.with_help(f"declare it: `verb {verb_name}`")
+                verb = m.Verb(verb_name, [], plan.name.span)
+            c.plans[verb_name] = self.plan(c, verb, plan)
+        for v in c.verbs.values():
+            if v.name not in c.plans:
+                diag = self.d.add("E0500", v.use_span, f"verb `{v.name}` of `{c.name}` has no plan", "no plan for this verb")
+                diag.with_help(f"add `plan {v.name} {{ ... }}` to `{c.name}`")
+
+    def plan(self, c: m.Controller, verb: m.Verb, plan: ast.Plan) -> m.Plan:
+        scope = Scope(self.g, controller=c, verb=verb, in_plan=True)
+        checker = Checker(scope, self.d)
+        const_checker = Checker(Scope(self.g, const_only=True), self.d)
+        rules: list[m.Rule] = []
+        labels: dict[str, Span] = {}
+        for i, r in enumerate(plan.rules):
+            if r.label.name in labels:
+                diag = self.d.add("E0508", r.label.span, f"rule label `{r.label.name}` is used twice in plan `{verb.name}`", "repeated label")
+                diag.with_label(labels[r.label.name], "first used here")
+            else:
+                labels[r.label.name] = r.label.span
+            state = m.StateRef(r.state.kind, r.state.name, r.state.span)
+            if state.kind == "named" and state.name in ("done", "error"):
+                self.d.add("E0510", r.state.span, f"`{state.name}` is terminal and cannot be a current state", "terminal state").with_note(
+                    "after `done` or `error` the plan is idle until the next command"
+                )
+            if r.guard is None and state.kind == "any":
+                self.d.add("E0510", r.state.span, "`otherwise` needs a concrete state, not `*`", "`*` here").with_help(
+                    "use a rule with condition `true` for a catch-all in every state"
+                )
+            guard = checker.condition(r.guard) if r.guard is not None else None
+            nxt = m.StateRef(r.next.kind, r.next.name, r.next.span)
+            if nxt.kind == "new":
+                self.d.add("E0510", r.next.span, "`new` cannot be a next state", "entry state").with_note(
+                    "only a new command enters `new`"
+                )
+            if nxt.kind == "error" and r.next.code is not None:
+                code = const_checker.constant(r.next.code, I32, "an error code")
+                nxt.code = int(code.value) if code is not None and isinstance(code.value, int) else 0
+            jobs = checker.stmts(r.jobs)
+            rules.append(m.Rule(i, r.label.name, r.span, r.label.span, state, guard, r.guard_span, nxt, jobs))
+        ordered = any(mod.name == "ordered" for mod in plan.modifiers)
+        return m.Plan(verb.name, plan.span, plan.name.span, plan.continuous, rules, ordered)
+
+    # ---- pass 6: CPUs -----------------------------------------------------------
+
+    def cpus(self) -> dict[str, m.Cpu]:
+        out: dict[str, m.Cpu] = {}
+        for name, item in self.decls.items():
+            if not isinstance(item, ast.Cpu):
+                continue
+            hb = item.heartbeat[0] if item.heartbeat else None
+            if hb is None:
+                self.d.add("E0209", item.name.span, f"cpu `{name}` has no `heartbeat`", "no heartbeat").with_help(
+                    "add `heartbeat 30 ms` (the cycle period)"
+                )
+            elif hb.nanos <= 0:
+                self.d.add("E0209", hb.span, "the heartbeat must be longer than zero", "zero period")
+            for extra in item.heartbeat[1:]:
+                self.d.add("E0209", extra.span, "`heartbeat` is given more than once", "repeated `heartbeat`")
+            for extra in item.overhead[1:]:
+                self.d.add("E0209", extra.span, "`overhead` is given more than once", "repeated `overhead`")
+            for extra in item.schedule[1:]:
+                self.d.add("E0209", extra.span, "`schedule` is given more than once", "second schedule").with_help(
+                    "list every controller of the CPU in one `schedule`, in execution order"
+                )
+            if not item.schedule:
+                self.d.add("E0209", item.name.span, f"cpu `{name}` has no `schedule`", "no schedule")
+            schedule: list[m.NameUse] = []
+            for nl in item.schedule:  # a repeat in one CPU is E0604, as across CPUs
+                for ident in nl.names:
+                    first = next((u for u in schedule if u.name == ident.name), None)
+                    if first is not None:
+                        diag = self.d.add("E0604", ident.span, f"`{ident.name}` is scheduled more than once", "scheduled again")
+                        diag.with_label(first.span, f"first scheduled on `{name}`")
+                        continue
+                    schedule.append(m.NameUse(ident.name, ident.span))
+            for use in schedule:
+                if use.name not in self.g.controllers:
+                    self.d.add("E0104", use.span, f"no controller named `{use.name}`", "unknown controller")
+            schedule = [u for u in schedule if u.name in self.g.controllers]
+            cpu = m.Cpu(name, item.span, item.name.span, hb.nanos if hb else 0, item.overhead[0].nanos if item.overhead else 0, schedule)
+            cpu.heartbeat_span = hb.span if hb else None
+            out[name] = cpu
+        return out
+
+
+def ast_to_model(files: list[LoadedFile], diags: Diagnostics) -> m.Design:
+    """Resolve and type-check the loaded files into one design model."""
+    root = next((f for f in files if f.is_root), files[0])
+    name = root.tree.name.name if root.tree is not None and root.tree.name is not None else "design"
+    s = _Sema(files, diags)
+    s.collect()
+    s.types()
+    s.globals_()
+    s.interfaces()
+    for name_, item in s.decls.items():  # subordinates that are not controllers
+        if isinstance(item, ast.Controller):
+            for use in s.g.controllers[name_].subordinates:
+                if use.name not in s.g.controllers:
+                    s.d.add("E0104", use.span, f"no controller named `{use.name}`", "unknown controller")
+                    s.g.poisoned.add(use.name)
+    for c in s.g.controllers.values():
+        c.subordinates = [u for u in c.subordinates if u.name in s.g.controllers]
+    s.bodies()
+    head = root.tree.name.span if root.tree is not None and root.tree.name is not None else Span(root.source, 0, 0)
+    design = m.Design(name, head)
+    design.enums = {k: t for k, t in s.g.types.items() if isinstance(t, EnumType)}
+    design.records = {k: t for k, t in s.g.types.items() if isinstance(t, RecordType)}
+    design.consts = dict(s.g.consts)
+    design.gm = dict(s.g.gm)
+    design.functions = dict(s.g.functions)
+    design.controllers = dict(s.g.controllers)
+    design.cpus = s.cpus()
+    design.files = [f.source.path for f in files]
+    return design

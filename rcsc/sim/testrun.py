@@ -1,0 +1,215 @@
+"""`rcsc test`: find scenarios, run them, report like a test runner (`run_tests`).
+
+Where scenarios live: `*.scn` files beside a design file or in a
+`scenarios/` folder next to it.  A design file is a `.rcs` file that begins
+with `design NAME` (after comments).  Paths given on the command line may be
+design files, scenario files or folders (searched recursively).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import time
+from dataclasses import dataclass, field
+from xml.sax.saxutils import escape, quoteattr
+
+from rcsc.outputs import safeio
+from rcsc.diagnostics import Diagnostics
+from rcsc.driver import check_path
+from rcsc.front.loader import InputError
+from rcsc.sim.runner import RunResult, run_scenario
+from rcsc.front.scenario import text_to_scenario
+from rcsc.front.source import SourceFile
+
+_DESIGN_HEADER = re.compile(r"\A(?:\s|//[^\n]*\n|/\*.*?\*/)*design\s", re.S)
+
+
+def is_design_file(path: str) -> bool:
+    if not path.endswith(".rcs"):
+        return False
+    # Only regular files: a FIFO or device in a design folder must not block
+    # or flood the discovery (read_input opens without blocking).
+    try:
+        head = safeio.read_input(path)[:65536].decode("utf-8")
+    except (OSError, UnicodeDecodeError):
+        return False
+    return bool(_DESIGN_HEADER.match(head))
+
+
+def scenarios_of(design_path: str) -> list[str]:
+    folder = os.path.dirname(design_path) or "."
+    found = []
+    for where in (folder, os.path.join(folder, "scenarios")):
+        if os.path.isdir(where):
+            found += [os.path.join(where, f) for f in sorted(os.listdir(where)) if f.endswith(".scn")]
+    return found
+
+
+def design_of(scenario_path: str) -> str | None:
+    """The design a scenario belongs to: the one design file in its folder or the folder above."""
+    folder = os.path.dirname(scenario_path) or "."
+    for where in (folder, os.path.dirname(os.path.abspath(folder))):
+        designs = [os.path.join(where, f) for f in sorted(os.listdir(where)) if is_design_file(os.path.join(where, f))]
+        if len(designs) == 1:
+            return designs[0] if where == folder else os.path.relpath(designs[0])
+    return None
+
+
+def discover(paths: list[str]) -> tuple[list[tuple[str, list[str]]], list[str]]:
+    """[(design, [scenario, ...])] in a stable order, and problems found on the way."""
+    plan: dict[str, list[str]] = {}
+    problems: list[str] = []
+    for p in paths:
+        if os.path.isdir(p):
+            for root, dirs, files in os.walk(p):
+                dirs[:] = sorted(d for d in dirs if not d.startswith(".") and d not in ("__pycache__", "node_modules"))
+                for f in sorted(files):
+                    full = os.path.join(root, f)
+                    if is_design_file(full):
+                        plan.setdefault(full, []).extend(scenarios_of(full))
+        elif p.endswith(".scn") and os.path.isfile(p):
+            d = design_of(p)
+            if d is None:
+                problems.append(f"{p}: no single design file beside it or in the folder above")
+            else:
+                plan.setdefault(d, []).append(p)
+        elif os.path.isfile(p):
+            plan.setdefault(p, []).extend(scenarios_of(p))
+        else:
+            problems.append(f"{p}: no such file or folder")
+    return [(d, sorted(set(s))) for d, s in plan.items()], problems
+
+
+@dataclass
+class Outcome:
+    design: str
+    scenario: str
+    passed: bool
+    seconds: float
+    cycles: int = 0
+    message: str = ""  # failure report (several lines) or error text
+    diags: Diagnostics | None = None
+    result: RunResult | None = None
+
+
+@dataclass
+class Report:
+    outcomes: list[Outcome] = field(default_factory=list)
+
+    @property
+    def failed(self) -> int:
+        return sum(not o.passed for o in self.outcomes)
+
+    @property
+    def passed(self) -> int:
+        return sum(o.passed for o in self.outcomes)
+
+
+def failure_text(result: RunResult) -> str:
+    lines = []
+    for r in result.results:
+        if r.passed:
+            continue
+        x = r.expect
+        when = {"at": f"at {x.lo}", "within": f"within {x.lo}..{x.hi}", "always": "always", "final": "final"}[x.kind]
+        lines.append(f"expect {when}: {x.text}")
+        lines.append(f"  {x.span.file.path}:{x.span.line}:{x.span.col}")
+        unit = "tick" if result.multi_cpu else "cycle"  # several CPUs: scenarios count base ticks
+        seen = f"never true in the window; at {unit}" if x.kind == "within" else f"false at {unit}"
+        values = ", ".join(f"{k} = {v}" for k, v in r.values) or "(no inputs)"
+        lines.append(f"  {seen} {r.cycle}: {values}")
+    return "\n".join(lines)
+
+
+def run_one(design_path: str, scenario_path: str, design_cache: dict) -> Outcome:
+    start = time.perf_counter()
+    if design_path not in design_cache:
+        try:
+            design_cache[design_path] = check_path(design_path)
+        except InputError as exc:
+            design_cache[design_path] = exc
+    checked = design_cache[design_path]
+    if isinstance(checked, InputError):
+        return Outcome(design_path, scenario_path, False, 0.0, message=str(checked))
+    if not checked.ok or checked.model is None:
+        return Outcome(design_path, scenario_path, False, 0.0, message="the design has errors (run `rcsc check`)", diags=checked.diags)
+    diags = Diagnostics()
+    try:
+        text = safeio.read_input(scenario_path).decode("utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        return Outcome(design_path, scenario_path, False, 0.0, message=f"cannot read the scenario: {exc}")
+    sc = text_to_scenario(SourceFile(scenario_path, text), checked.model, diags)
+    if sc is None:
+        return Outcome(design_path, scenario_path, False, 0.0, message="the scenario has errors", diags=diags)
+    result = run_scenario(checked.model, sc)
+    seconds = time.perf_counter() - start
+    return Outcome(design_path, scenario_path, result.passed, seconds, sc.cycles, "" if result.passed else failure_text(result), result=result)
+
+
+def _xml_safe(text: str) -> str:
+    """`text` with every character that XML 1.0 forbids (most C0 controls,
+    U+FFFE/U+FFFF, lone surrogates) shown as a visible `\\xNN` escape, so a
+    control byte in a scenario cannot make the report unreadable."""
+    out = []
+    for ch in text:
+        o = ord(ch)
+        ok = ch in "\t\n\r" or 0x20 <= o <= 0xD7FF or 0xE000 <= o <= 0xFFFD or 0x10000 <= o <= 0x10FFFF
+        out.append(ch if ok else f"\\x{o:02x}" if o < 0x100 else f"\\u{o:04x}")
+    return "".join(out)
+
+
+def _attr(text: str) -> str:
+    return quoteattr(_xml_safe(text))
+
+
+def _is_error(o: Outcome) -> bool:
+    """A scenario that could not run (design or scenario with errors, unreadable
+    file) is a JUnit `error`; one that ran and missed an expectation a `failure`."""
+    return not o.passed and o.result is None
+
+
+def _error_text(o: Outcome) -> tuple[str, str]:
+    """The `message` (the first error, else the outcome's message) and the
+    text (the message, then every finding) of an `<error>`."""
+    from rcsc.render import render_short
+
+    if o.diags is None or not o.diags.items:
+        return (o.message.splitlines() or ["error"])[0], o.message
+    errors = [d for d in o.diags.sorted() if d.severity.value == "error"]
+    first = render_short(errors[:1] or o.diags.sorted()[:1]).strip()
+    return first, o.message + "\n" + render_short(o.diags)
+
+
+def to_junit(report: Report) -> str:
+    """JUnit XML: one testsuite per design, one testcase per scenario.
+
+    A scenario that ran and missed an expectation is a `<failure>`; one that
+    could not run is an `<error>` whose message is the first finding and whose
+    text lists every finding (`file:line:col: severity[CODE]: message`)."""
+    suites: dict[str, list[Outcome]] = {}
+    for o in report.outcomes:
+        suites.setdefault(o.design, []).append(o)
+    errors_total = sum(_is_error(o) for o in report.outcomes)
+    out = ['<?xml version="1.0" encoding="UTF-8"?>']
+    out.append(
+        f'<testsuites name="rcsc" tests="{len(report.outcomes)}" failures="{report.failed - errors_total}" errors="{errors_total}">'
+    )
+    for design, items in suites.items():
+        errs = sum(_is_error(o) for o in items)
+        fails = sum(not o.passed for o in items) - errs
+        total = sum(o.seconds for o in items)
+        out.append(f'  <testsuite name={_attr(design)} tests="{len(items)}" failures="{fails}" errors="{errs}" time="{total:.3f}">')
+        for o in items:
+            name = os.path.basename(o.scenario)
+            out.append(f'    <testcase classname={_attr(design)} name={_attr(name)} file={_attr(o.scenario)} time="{o.seconds:.3f}">')
+            if _is_error(o):
+                first, body = _error_text(o)
+                out.append(f"      <error message={_attr(first)} type=\"rcsc\">{escape(_xml_safe(body))}</error>")
+            elif not o.passed:
+                first = o.message.splitlines()[0] if o.message else "failed"
+                out.append(f"      <failure message={_attr(first)}>{escape(_xml_safe(o.message))}</failure>")
+            out.append("    </testcase>")
+        out.append("  </testsuite>")
+    out.append("</testsuites>")
+    return "\n".join(out) + "\n"
