@@ -1,0 +1,163 @@
+"""Coverage-guided fuzzing of rcsc's front end with atheris (libFuzzer for Python).
+
+The hypothesis families of tests/test_fuzz.py draw inputs blindly; this harness
+lets libFuzzer's coverage feedback steer the inputs into the branches the
+random families miss.  Three targets, each with an oracle that can fail:
+
+  parsers   the fast parser (rcsc.front.rdparse) against the reference grammar
+            (grammar/rcs.lark): the same tree, span for span, and the same
+            findings, byte for byte (tests/test_fastparse.py's comparison);
+  check     the whole of `rcsc check` on the text (parse, model, every check
+            family with z3): no exception escapes, every finding has a code and
+            a span inside the file;
+  scenario  a scenario text against the submarine design through the one
+            scenario parser: no exception, every finding has a span inside it.
+
+The corpus starts from every .rcs (or .scn) file of the repository, and a
+dictionary of the language's keywords and punctuation helps the mutator.
+
+    python bench/fuzz_front.py parsers -max_total_time=600      # ten minutes
+    python bench/fuzz_front.py check -runs=20000 -jobs=2
+
+Any further arguments are libFuzzer's (-runs, -max_total_time, -seed, ...).
+A failure writes `crash-<hash>` in the working folder and exits non-zero;
+rerun it with `python bench/fuzz_front.py TARGET crash-<hash>`.  The suite
+runs a bounded slice of each target (tests/test_fuzz_coverage.py).
+`--plant-bug` makes the parsers oracle fail on a valid `period` attribute: the
+suite uses it to show that the harness really reports what it finds.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import atheris
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+# Instrument rcsc (and lark, whose parser is half of the parsers oracle) so
+# that libFuzzer sees their branches; the rest of the import graph is not
+# worth the slowdown.
+with atheris.instrument_imports(include=["rcsc", "lark"]):
+    from rcsc.diagnostics import Diagnostics
+    from rcsc.driver import check_path
+    from rcsc.front.parse import text_to_ast, text_to_ast_lark
+    from rcsc.front.scenario import text_to_scenario
+    from rcsc.front.source import SourceFile
+
+import test_fastparse  # noqa: E402  (tree_difference and the findings view)
+import test_fuzz  # noqa: E402  (KEYWORDS and PUNCT of the language)
+
+PLANT_BUG = False
+SUBMARINE = ROOT / "examples" / "submarine" / "submarine.rcs"
+
+
+def _text(data: bytes) -> str | None:
+    """The input as text; rcsc refuses non-UTF-8 files before parsing (E0001)."""
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return None
+
+
+def _assert_spans(diags) -> None:
+    for d in diags:
+        assert d.code and d.code[0] in "EW", f"finding without a code: {d}"
+        for span in [d.span, *(label.span for label in d.labels)]:
+            if span is not None:
+                n = len(span.file.text)
+                assert 0 <= span.start <= span.end <= n, f"{d.code} span {span.start}-{span.end} outside 0-{n}"
+
+
+def fuzz_parsers(data: bytes) -> None:
+    text = _text(data)
+    if text is None:
+        return
+    source = SourceFile("fuzz.rcs", text)
+    ref_diags, got_diags = Diagnostics(), Diagnostics()
+    ref = text_to_ast_lark(source, ref_diags)
+    got = text_to_ast(source, got_diags)
+    difference = test_fastparse.tree_difference(ref, got)
+    if PLANT_BUG and got is not None and ref is not None and " period " in text:
+        difference = "planted"
+    assert difference is None, f"trees differ at {difference}"
+    assert test_fastparse._findings(ref_diags) == test_fastparse._findings(got_diags), "findings differ"
+
+
+_WORK = Path(tempfile.mkdtemp(prefix="rcsc-fuzz-"))
+
+
+def fuzz_check(data: bytes) -> None:
+    text = _text(data)
+    if text is None:
+        return
+    path = str(_WORK / "fuzz.rcs")
+    # The overlay gives the text without touching the disk for every input;
+    # imports of local modules resolve against the empty work folder.
+    _assert_spans(check_path(path, overlay={path: text}).diags)
+
+
+_DESIGN = None
+
+
+def fuzz_scenario(data: bytes) -> None:
+    global _DESIGN
+    text = _text(data)
+    if text is None:
+        return
+    if _DESIGN is None:
+        _DESIGN = check_path(str(SUBMARINE)).model
+    diags = Diagnostics()
+    text_to_scenario(SourceFile("fuzz.scn", text), _DESIGN, diags)
+    _assert_spans(diags)
+
+
+TARGETS = {"parsers": (fuzz_parsers, "*.rcs"), "check": (fuzz_check, "*.rcs"), "scenario": (fuzz_scenario, "*.scn")}
+
+
+def _seed_corpus(pattern: str) -> Path:
+    """A fresh corpus folder holding the repository's files of one kind.
+
+    libFuzzer adds what it finds to the first corpus folder; a temporary one
+    keeps the checkout clean."""
+    folder = Path(tempfile.mkdtemp(prefix="rcsc-corpus-"))
+    for k, path in enumerate(sorted(p for p in ROOT.rglob(pattern) if ".venv" not in p.parts and "build" not in p.parts)):
+        (folder / f"{k:04d}-{path.name}").write_bytes(path.read_bytes()[:20000])
+    return folder
+
+
+def _dictionary() -> Path:
+    """A libFuzzer dictionary: every keyword and punctuation mark, quoted."""
+    path = _WORK / "rcs.dict"
+    words = sorted(set(test_fuzz.KEYWORDS) | set(test_fuzz.PUNCT))
+    def quote(word: str) -> str:
+        # libFuzzer's dictionary syntax: printable ASCII as is, the rest,
+        # quotes and backslashes as \xNN escapes of the UTF-8 bytes.
+        return "".join(chr(b) if 32 <= b < 127 and b not in (34, 92) else f"\\x{b:02X}" for b in word.encode())
+
+    path.write_text("".join(f'"{quote(w)}"\n' for w in words))
+    return path
+
+
+def main(argv: list[str]) -> None:
+    global PLANT_BUG
+    if len(argv) < 2 or argv[1] not in TARGETS:
+        sys.exit(f"usage: {argv[0]} {{{'|'.join(TARGETS)}}} [--plant-bug] [libFuzzer options or crash files]")
+    target, pattern = TARGETS[argv[1]]
+    rest = argv[2:]
+    if "--plant-bug" in rest:
+        PLANT_BUG = True
+        rest.remove("--plant-bug")
+    replay = [a for a in rest if not a.startswith("-")]
+    extra = [] if replay else [str(_seed_corpus(pattern)), f"-dict={_dictionary()}"]
+    os.environ.setdefault("RCSC_NO_CACHE", "1")
+    atheris.Setup([argv[0], *rest, *extra], target)
+    atheris.Fuzz()
+
+
+if __name__ == "__main__":
+    main(sys.argv)
