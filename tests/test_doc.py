@@ -205,7 +205,7 @@ def test_cli_doc(tmp_path: Path, capsys) -> None:
 
 def test_template_ships_in_the_package() -> None:
     pyproject = (ROOT / "pyproject.toml").read_text(encoding="utf-8")
-    assert re.search(r'^"rcsc" = \[[^\]]*"templates/\*"', pyproject, re.M)
+    assert re.search(r'^"rcsc\.outputs" = \[[^\]]*"templates/\*"', pyproject, re.M)
     assert {"doc.html.j2", "doc.css"} <= {p.name for p in doc.TEMPLATES.iterdir()}
 
 
