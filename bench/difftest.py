@@ -52,7 +52,6 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", default="0..9", help="A..B, both included")
     ap.add_argument("--hostile-names", action="store_true", help="names that are C/Rust keywords, macros, colliding or long")
-    ap.add_argument("--hostile-literals", action="store_true", help="integer constants where the Rust target mistypes them")
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--targets", default="c,rust")
     ap.add_argument("--batch", type=int, default=10, help="seeds per cargo workspace")
@@ -77,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
             ran = seeds[:i]
             break
         t0 = time.monotonic()
-        batch = [generate(s, hostile=args.hostile_names, hostile_literals=args.hostile_literals) for s in seeds[i:i + args.batch]]
+        batch = [generate(s, hostile=args.hostile_names) for s in seeds[i:i + args.batch]]
         gen_time += time.monotonic() - t0
         retries += sum(c.attempt for c in batch)
         for c in batch:

@@ -17,11 +17,12 @@ guard analysis of `rcsc check` stays fast.  A design that still does not check
 clean (a condition that happens to be always false, say) is drawn again from
 the next sub-seed; `Case.attempt` says how many draws it took.
 
-`hostile_literals=True` also writes `if` expressions whose branches are both
-integer constants, which the Rust target leaves untyped where the context
-gives no type (`i32(if c then u32(1) else u32(4294967295))`, `(if c then
-u32(4294967295) else u32(3)) == 2147483648`): a known problem of literal
-typing, left out by default.
+Integer `if` expressions whose branches are both constants are drawn where
+the context gives them no type (`i32(if c then u32(1) else u32(4294967295))`,
+`(if c then u32(4294967295) else u32(3)) == 2147483648`): the Rust target
+once left such literals to rustc's inference.  Extern functions (declared,
+called from controllers, never from a pure `fn`) come from a random stream
+of their own.
 
 `hostile=True` draws names that are reserved words or well-known macros of C
 and Rust, names that collide once joined with `_`, and very long names:
@@ -156,9 +157,8 @@ class Names:
 class DesignGen:
     """One draw of a design and its scenario from a seed."""
 
-    def __init__(self, seed: int, hostile: bool = False, hostile_literals: bool = False) -> None:
+    def __init__(self, seed: int, hostile: bool = False) -> None:
         self.rng = random.Random(seed)
-        self.hostile_literals = hostile_literals
         self.seed = seed
         self.names = Names(self.rng, hostile)
         self.hostile = hostile
@@ -171,6 +171,11 @@ class DesignGen:
         self.ctrls: list[Ctrl] = []
         self.std_math = self.rng.random() < 0.8
         self.budget = 0  # expression nodes left in the current expression
+        # Extern functions are drawn from a stream of their own, so that adding
+        # them changed a seed's design only where an extern is declared or called.
+        self.ext_rng = random.Random(seed ^ 0x5EED)
+        self.externs: list[tuple[str, list[tuple[str, str]], str]] = []
+        self.in_fn = False  # a pure `fn` cannot call an extern (E0211)
 
     # ---- types and values ------------------------------------------------------------
 
@@ -260,10 +265,6 @@ class DesignGen:
             if k < 0.6:
                 src = r.choice([x for x in NUM_TYPES if x != t] + [t])
                 inner = self.expr(src, scope, d, False)
-                if inner.startswith("(if ") and not self.hostile_literals:
-                    # An `if` of two integer constants under a conversion is
-                    # mistyped by the Rust target (see --hostile-literals).
-                    inner = self.leaf(src, scope, False)
                 return f"{t}({inner})"
             if k < 0.7:
                 f = r.choice(["abs", "min", "max"])
@@ -272,8 +273,6 @@ class DesignGen:
                 return f"{f}({self.expr(t, scope, d, anch)}, {self.expr(t, scope, d, anch)})"
             if k < 0.78:
                 then = self.expr(t, scope, d, anch)
-                if t in INT_TYPES and not self.hostile_literals:
-                    then = self.nonconst(t, scope) or then
                 return f"(if {self.cond(scope, d)} then {then} else {self.expr(t, scope, d, anch)})"
             if k < 0.86 and t == "f64":
                 return f"seconds({self.expr('duration', scope, d)})"
@@ -311,17 +310,14 @@ class DesignGen:
             return f"{t}(" + ", ".join(f"{f} = {self.expr(ft, scope, d)}" for f, ft in rec.fields) + ")"
         return self.leaf(t, scope)
 
-    def nonconst(self, t: str, scope: list[Var]) -> str | None:
-        """A value of integer type t that the checker cannot fold: a variable, or a
-        conversion of one.  An `if` with such a branch has a type in the Rust
-        target even where its context gives none (see --hostile-literals)."""
-        same = [v.name for v in scope if v.type == t]
-        if same:
-            return self.rng.choice(same)
-        nums = [v.name for v in scope if v.type in NUM_TYPES]
-        return f"{t}({self.rng.choice(nums)})" if nums else None
-
     def call(self, t: str, scope: list[Var], depth: int) -> str | None:
+        exts = [(n, [pt for _, pt in ps]) for n, ps, rt in self.externs if rt == t]
+        if exts and not self.in_fn and self.ext_rng.random() < 0.5:
+            # The simulator's extern returns the zero value of its type, as the
+            # generated stubs of both targets do: the call, its arguments and
+            # the conversion of the result are what is compared.
+            name, params = self.ext_rng.choice(exts)
+            return f"{name}(" + ", ".join(self.expr(pt, scope, depth) for pt in params) + ")"
         cands = [(n, [pt for _, pt in ps]) for n, ps, rt in self.fns if rt == t]
         if self.std_math:
             cands += [(n, list(ps)) for n, ps in STD_MATH.get(t, [])]
@@ -451,6 +447,11 @@ class DesignGen:
         for _ in range(r.randint(0, 3)):
             params = [(n.fresh("a"), self.rtype()) for _ in range(r.randint(1, 3))]
             self.fns.append((n.fresh("fun"), params, self.rtype(scalar_weight=10)))
+        e = self.ext_rng
+        for i in range(e.choice([0, 0, 1, 2])):
+            pool = list(SCALARS) * 4 + list(self.enums) + list(self.records)
+            params = [(f"x{j}", e.choice(pool)) for j in range(e.randint(0, 3))]
+            self.externs.append((f"ext{self.seed % 1000}_{i}", params, e.choice(pool)))
         for _ in range(r.randint(1, 5)):
             self.env.append(Var(n.fresh("in"), self.rtype(scalar_weight=8)))
         if not any(v.type in NUM_TYPES for v in self.env):
@@ -492,7 +493,9 @@ class DesignGen:
         saved = self.fns
         self.fns = self.fns[:index]
         self.budget = 10
+        self.in_fn = True
         body = self.expr(ret, [Var(p, t) for p, t in params], 3)
+        self.in_fn = False
         self.fns = saved
         return f"fn {name}(" + ", ".join(f"{p}: {t}" for p, t in params) + f") -> {ret} =\n    {body}"
 
@@ -578,6 +581,8 @@ class DesignGen:
             out.append(f"const {cst.name}: {cst.type} = {self.const_value(cst.type)}")
         for i, (fname, params, ret) in enumerate(self.fns):
             out.append(self.function(fname, params, ret, i))
+        for ename, params, ret in self.externs:
+            out.append(f"extern fn {ename}(" + ", ".join(f"{p}: {t}" for p, t in params) + f") -> {ret} budget 1 us")
         for v in self.env:
             out.append(f"gm {v.name}: {v.type} = {self.literal(v.type)} from env")
         for v in self.gm_out:
@@ -643,15 +648,15 @@ class DesignGen:
         return "\n".join(lines) + "\n"
 
 
-def draw(seed: int, attempt: int, hostile: bool = False, hostile_literals: bool = False) -> Case:
+def draw(seed: int, attempt: int, hostile: bool = False) -> Case:
     """One draw, not checked."""
-    gen = DesignGen(seed * 1000 + attempt, hostile, hostile_literals)
+    gen = DesignGen(seed * 1000 + attempt, hostile)
     name = f"d{seed}"
     design = gen.design(name)
     return Case(seed, design, gen.scenario(), attempt, name)
 
 
-def generate(seed: int, hostile: bool = False, max_attempts: int = 50, hostile_literals: bool = False) -> Case:
+def generate(seed: int, hostile: bool = False, max_attempts: int = 50) -> Case:
     """The first draw of `seed` whose design checks without errors and whose scenario loads.
 
     Random conditions often hide a later rule behind an earlier one (E0506);
@@ -659,7 +664,7 @@ def generate(seed: int, hostile: bool = False, max_attempts: int = 50, hostile_l
     the next draw is taken.
     """
     for attempt in range(max_attempts):
-        case = draw(seed, attempt, hostile, hostile_literals)
+        case = draw(seed, attempt, hostile)
         for _ in range(4):
             errors, dead = check_case(case)
             if not errors:

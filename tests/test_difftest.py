@@ -87,7 +87,9 @@ def test_minimiser_keeps_the_failure_and_validity() -> None:
         return " % " in c.design
 
     assert fails(case)
-    small, tries = minimise(case, fails, budget_s=120)
+    # The minimiser stops at a fixed point; the budget only guards against a
+    # loop, so a loaded machine does not cut the shrinking short.
+    small, tries = minimise(case, fails, budget_s=900)
     assert fails(small)
     assert check_case(small)[0] == []
     assert len(small.design) < len(case.design) / 2, small.design
@@ -109,16 +111,23 @@ HOSTILE_SLICE = [1, 2, 3, 4]
 
 
 def test_hostile_slice_agrees_everywhere(tmp_path: Path) -> None:
-    cases = [generate(s, hostile=True, hostile_literals=True) for s in HOSTILE_SLICE]
+    cases = [generate(s, hostile=True) for s in HOSTILE_SLICE]
     findings = run_batch(cases, ["c", "rust"], jobs=2, workdir=tmp_path)
     assert findings == [], "\n\n".join(f"{f.line()}\n{f.detail}" for f in findings)
 
 
-def test_hostile_literals_only_behind_the_option() -> None:
-    """`i32(if c then u32(1) else u32(4294967295))`: the Rust target mistypes the
-    constants of such an `if`; the default generator leaves it out."""
-    pattern = re.compile(r"\b(i32|i64|u32|f64)\(\(if ")
-    plain = "\n".join(draw(s, 0).design for s in range(40))
-    hostile = "\n".join(draw(s, 0, hostile_literals=True).design for s in range(40))
-    assert not pattern.search(plain)
-    assert pattern.search(hostile)
+def test_the_generator_draws_untyped_if_literals_and_externs() -> None:
+    """`i32(if c then u32(1) else u32(4294967295))` (constants whose type only
+    the context gives, once mistyped by the Rust target) and extern functions,
+    declared and called from controllers, are in the default draws."""
+    designs = [draw(s, 0).design for s in range(40)]
+    text = "\n".join(designs)
+    assert re.search(r"\b(i32|i64|u32|f64)\(\(if ", text)
+    externs = [d for d in designs if "extern fn " in d]
+    assert externs
+    called = [d for d in externs if re.search(r"\bext\d+_\d+\(", d.split("extern fn", 1)[1].split("\n", 1)[1])]
+    assert called
+    for d in externs:  # a pure fn never calls one (E0211)
+        lines = d.splitlines()
+        bodies = [lines[i + 1] for i, line in enumerate(lines) if line.startswith("fn ")]
+        assert not any(re.search(r"\bext\d+_\d+\(", b) for b in bodies)
