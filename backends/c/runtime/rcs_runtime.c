@@ -361,8 +361,9 @@ static int ev_read(ev_reader *r, char *text, size_t len, rcs_scenario *sc) {
         at = (size_t)(nl - text) + 1;
         if (r->line == 1) {
             uint64_t version;
-            if (!ev_split(r, s) || strcmp(r->w[0], "rcsc-events") != 0 || r->n != 4)
-                return ev_error(r, "not an rcsc event file; %s", hint);
+            if (strncmp(s, "rcsc-events ", 12) != 0) return ev_error(r, "not an rcsc event file; %s", hint);
+            if (!ev_split(r, s)) return 0;
+            if (r->n != 4) return ev_error(r, "not an rcsc event file; %s", hint);
             if (!ev_number(r, 1, 10, &version)) return 0;
             if (version != 1) return ev_error(r, "event file version %" PRIu64 "; this Main Program reads version 1", version);
             if (strcmp(r->w[2], d->design) != 0 || strcmp(r->w[3], d->events_hash) != 0)
