@@ -442,6 +442,11 @@ def _run_events(args: argparse.Namespace) -> int:
 def _add_test_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("paths", metavar="PATH", nargs="*", default=["."], help="design files, scenario files or folders (default: .)")
     p.add_argument("--junit", metavar="FILE", help="also write a JUnit XML report to FILE")
+    p.add_argument(
+        "--target", choices=("sim", "c", "rust"), default="sim",
+        help="run the scenarios in the simulator (default) or on the compiled Main Program (built once, see docs/events.md)",
+    )
+    p.add_argument("--build-dir", metavar="DIR", default="build/rcsc-test", help="where --target c|rust builds the design (default: build/rcsc-test)")
 
 
 def _run_test(args: argparse.Namespace) -> int:
@@ -456,7 +461,7 @@ def _run_test(args: argparse.Namespace) -> int:
         if not scenarios:
             continue
         for scn in scenarios:
-            outcome = testrun.run_one(design, scn, cache)
+            outcome = testrun.run_one(design, scn, cache, args.target, args.build_dir)
             report.outcomes.append(outcome)
             word = "PASS" if outcome.passed else "FAIL"
             unit = "ticks" if outcome.result is not None and outcome.result.multi_cpu else "cycles"
