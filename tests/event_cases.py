@@ -39,6 +39,7 @@ controller TOP level 2 budget 1 ms {
 }
 controller SUB level 1 budget 1 ms {
     verb GO
+    status ticks: i32 = 0
     plan GO { G0: true | new -> done; }
 }
 cpu MAIN {

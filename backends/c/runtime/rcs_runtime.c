@@ -236,8 +236,8 @@ static int ev_tick(ev_reader *r, const rcs_scenario *sc, uint64_t *last, uint64_
 static int ev_record(ev_reader *r, rcs_scenario *sc, uint64_t last[4]) {
     const rcs_design *d = r->d;
     const char *kw = r->w[0];
-    uint64_t tick;
-    size_t id;
+    uint64_t tick = 0;
+    size_t id = 0;
     event ev;
     memset(&ev, 0, sizeof ev);
     if (strcmp(kw, "input") == 0) {
@@ -254,7 +254,7 @@ static int ev_record(ev_reader *r, rcs_scenario *sc, uint64_t last[4]) {
         return ev_values(r, 3, &f, 1, ev.blob);
     }
     if (strcmp(kw, "command") == 0) {
-        size_t vi;
+        size_t vi = 0;
         if (!ev_tick(r, sc, &last[1], &tick) || !ev_index(r, 2, d->n_ctrls, "controller", &id)) return 0;
         const rcs_ctrl *c = &d->ctrls[id];
         if (!c->top) return ev_error(r, "`%s` takes commands only from its supervisor", c->name);

@@ -562,7 +562,10 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
         let bytes = match std::fs::read(path) {
             Ok(bytes) => bytes,
             Err(e) => {
-                say!("{path}: error: cannot read the event file: {}", strerror(&e));
+                say!(
+                    "{path}: error: cannot read the event file: {}",
+                    strerror(&e)
+                );
                 return 2;
             }
         };

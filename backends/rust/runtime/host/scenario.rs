@@ -16,7 +16,8 @@ pub struct ScnError {
     pub message: String,
 }
 
-const HINT: &str = "compile the scenario with `rcsc events DESIGN SCENARIO -o FILE` (docs/events.md)";
+const HINT: &str =
+    "compile the scenario with `rcsc events DESIGN SCENARIO -o FILE` (docs/events.md)";
 const MAX_WORDS: usize = 4096;
 
 struct Event {
@@ -62,7 +63,8 @@ impl Line<'_> {
             )));
         };
         let ok = !s.is_empty()
-            && s.bytes().all(|b| (base == 16 && b.is_ascii_hexdigit()) || b.is_ascii_digit())
+            && s.bytes()
+                .all(|b| (base == 16 && b.is_ascii_hexdigit()) || b.is_ascii_digit())
             && (base == 10 || s.len() <= 16);
         match u64::from_str_radix(s, base).ok().filter(|_| ok) {
             Some(v) => Ok(v),
@@ -77,11 +79,10 @@ impl Line<'_> {
 
     fn index(&self, i: usize, n: usize, what: &str) -> Result<usize, ScnError> {
         let v = self.number(i, 10)?;
-        usize::try_from(v).ok().filter(|&x| x < n).ok_or_else(|| {
-            self.err(format!(
-                "{what} {v} is out of range (the design has {n})"
-            ))
-        })
+        usize::try_from(v)
+            .ok()
+            .filter(|&x| x < n)
+            .ok_or_else(|| self.err(format!("{what} {v} is out of range (the design has {n})")))
     }
 }
 
@@ -105,7 +106,9 @@ fn value(line: &Line<'_>, t: &TypeDesc, k: &mut usize) -> Result<Value, ScnError
     *k += 1;
     let limit = match &t.kind {
         Kind::Bool => 1,
-        Kind::Enum(members) => u64::try_from(members.len()).unwrap_or(u64::MAX).saturating_sub(1),
+        Kind::Enum(members) => u64::try_from(members.len())
+            .unwrap_or(u64::MAX)
+            .saturating_sub(1),
         Kind::I32 | Kind::U32 => u64::from(u32::MAX),
         _ => u64::MAX,
     };
@@ -222,10 +225,7 @@ impl Scenario {
                 }
                 sc.cycles = line.number(1, 10)?;
                 if sc.cycles < 1 || sc.cycles > u64::from(u32::MAX) {
-                    return Err(line.err(format!(
-                        "cycles {} is outside 1..4294967295",
-                        sc.cycles
-                    )));
+                    return Err(line.err(format!("cycles {} is outside 1..4294967295", sc.cycles)));
                 }
                 continue;
             }
@@ -235,9 +235,7 @@ impl Scenario {
                 }
                 let n = line.number(1, 10)?;
                 if n != records {
-                    return Err(line.err(format!(
-                        "`end {n}` but the file has {records} events"
-                    )));
+                    return Err(line.err(format!("`end {n}` but the file has {records} events")));
                 }
                 if !rest.is_empty() {
                     return Err(line.err("text after the `end` line"));
