@@ -153,3 +153,15 @@ def test_a_failing_scenario_fails_on_c_and_rust_and_the_build_is_reused(tmp_path
     rc, out, _ = rcsc("test", "--target", "c", "--build-dir", str(builds), str(good))
     assert rc == 0 and out.endswith("1 passed, 0 failed\n")
     assert c_program.stat().st_mtime_ns == stamp
+
+
+def test_a_deployment_build_has_its_own_ids_and_hash(tmp_path: Path) -> None:
+    """Without the simulators the controller ids and the interface hash are the deployment build's."""
+    scn = tmp_path / "s.scn"
+    scn.write_text("cycles 5\nat 1: SM.INIT()\nat 2: freeze SHIP_SIM\nat 3: freeze TB\n", encoding="utf-8")
+    full = rcsc("events", str(SUBMARINE), str(scn))[1].splitlines()
+    deploy = rcsc("events", str(SUBMARINE), str(scn), "--exclude-simulators")[1].splitlines()
+    assert full[0].split(" ")[:3] == deploy[0].split(" ")[:3] and full[0] != deploy[0]
+    # SM, PR, TB, TURBINE_SIM, SHIP_SIM; the deployment build has SM, PR, TB
+    assert full[2:] == ["command 1 0 2 0", "freeze 2 4", "freeze 3 2", "end 3"]
+    assert deploy[2:] == ["command 1 0 2 0", "freeze 3 2", "end 2"]
