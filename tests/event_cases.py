@@ -101,7 +101,10 @@ def event_errors() -> list[tuple[str, bytes, str]]:
     cases = [
         ("empty", "", f"1: error: not an rcsc event file; {HINT}"),
         ("scenario_text", "cycles 5\nat 1: TOP.INIT()\n", f"1: error: not an rcsc event file; {HINT}"),
-        ("nul_byte", "rcsc-events 1\0", f"1: error: not an rcsc event file (it holds a NUL byte); {HINT}"),
+        ("nul_byte", "rcsc-events 1\0", "1: error: byte 0x00 is not printable ASCII"),
+        ("not_ascii", c5 + "input 1 4 1 \x7f\nend 1\n", "3: error: byte 0x7f is not printable ASCII"),
+        ("carriage_return", h + "cycles 5\r\nend 0\r\n", "2: error: byte 0x0d is not printable ASCII"),
+        ("header_prefix", "rcsc-event 1 fixture x\n", f"1: error: not an rcsc event file; {HINT}"),
         ("header_only_word", "rcsc-events\n", f"1: error: not an rcsc event file; {HINT}"),
         ("header_words", "rcsc-events 1 fixture\ncycles 5\nend 0\n", f"1: error: not an rcsc event file; {HINT}"),
         ("wrong_version", f"rcsc-events 2 fixture {fixture_hash()}\ncycles 5\nend 0\n", "1: error: event file version 2; this Main Program reads version 1"),
@@ -143,3 +146,24 @@ def event_errors() -> list[tuple[str, bytes, str]]:
         ("stop_extra", c5 + "stop 1 0 0\nend 1\n", "3: error: `stop` takes a tick and one id"),
     ]
     return [(n, t.encode("utf-8"), e) for n, t, e in cases]
+
+
+def mutations(data: bytes, n: int, seed: int = 15) -> list[bytes]:
+    """`n` corrupted copies of an event file: a byte changed, dropped or doubled (seeded)."""
+    import random
+
+    rng = random.Random(seed)
+    alphabet = b"0123456789abcdefx -\n\0\xff"
+    out = []
+    for _ in range(n):
+        b = bytearray(data)
+        i = rng.randrange(len(b))
+        kind = rng.randrange(3)
+        if kind == 0:
+            b[i] = rng.choice(alphabet)
+        elif kind == 1:
+            del b[i]
+        else:
+            b.insert(i, b[i])
+        out.append(bytes(b))
+    return out

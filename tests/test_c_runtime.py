@@ -26,7 +26,7 @@ from pathlib import Path
 
 import pytest
 
-from event_cases import COMPUTED, event_errors, events, fixture_hash
+from event_cases import COMPUTED, event_errors, events, fixture_hash, mutations
 from rcsc.sim import trace
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -461,6 +461,11 @@ def test_clean_under_ubsan_and_asan(san_exe, tmp_path):
     for n in range(0, len(data), 7):
         r = run(san_exe, tmp_path, data[:n], env=env)
         assert r.returncode == 2 and r.stderr.count("\n") == 1, (n, r.stderr)
+    for k, bad in enumerate(mutations(events(GOOD).encode("utf-8"), 150)):
+        r = run(san_exe, tmp_path, bad, "--trace", "-", env=env)
+        # a mutation may still be a valid file (another value): it runs, else one error line
+        assert (r.returncode, r.stderr.count("\n")) in ((0, 0), (2, 1)), (k, bad, r.stderr)
+        assert r.returncode == 0 or ": error: " in r.stderr
     r = subprocess.run([str(san_exe), "--cycles", "3", "--no-console"], capture_output=True, text=True, env=env, stdin=subprocess.DEVNULL)
     assert r.returncode == 0 and r.stderr.startswith("rcs: timing of fixture on MAIN, 3 cycles")
     r = subprocess.run([str(san_exe), "--bogus"], capture_output=True, text=True, env=env)

@@ -35,7 +35,7 @@ from pathlib import Path
 import pytest
 
 from c_build import Console
-from event_cases import COMPUTED, event_errors, events
+from event_cases import COMPUTED, event_errors, events, mutations
 
 from rcsc.semantics import numeric
 from rcsc.sim.trace import fmt_float
@@ -185,6 +185,16 @@ def test_every_truncation_is_refused(crate: Crate, tmp_path: Path) -> None:
         scn.write_bytes(data[:n])
         proc = run_scenario(crate.debug, scn)
         assert (proc.returncode, proc.stdout, proc.stderr.count("\n")) == (2, "", 1), (n, proc.stderr)
+        assert "panicked" not in proc.stderr
+
+
+def test_corrupted_event_files_never_panic(crate: Crate, tmp_path: Path) -> None:
+    """Seeded mutations of a good event file: a run or one error line, never a panic."""
+    scn = tmp_path / "bad.events"
+    for k, bad in enumerate(mutations(events(SCENARIO).encode("utf-8"), 150)):
+        scn.write_bytes(bad)
+        proc = run_scenario(crate.debug, scn)
+        assert (proc.returncode, proc.stderr.count("\n")) in ((0, 0), (2, 1)), (k, bad, proc.stderr)
         assert "panicked" not in proc.stderr
 
 

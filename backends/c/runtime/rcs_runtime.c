@@ -211,7 +211,7 @@ static int ev_value(ev_reader *r, const rcs_type *t, unsigned char *dst, size_t 
     return 1;
 }
 
-/* The leaf count at w[at] and the leaves after it, for `n_types` values. */
+/* The leaf count at w[at] and the leaves after it: the values of fields f[0..n_f) into blob. */
 static int ev_values(ev_reader *r, size_t at, const rcs_field *f, size_t n_f, unsigned char *blob) {
     size_t want = 0, k = at + 1;
     for (size_t i = 0; i < n_f; i++) want += count_leaves(f[i].type);
@@ -344,24 +344,25 @@ static int ev_read(ev_reader *r, char *text, size_t len, rcs_scenario *sc) {
     static const char hint[] = "compile the scenario with `rcsc events DESIGN SCENARIO -o FILE` (docs/events.md)";
     uint64_t last[4] = {0, 0, 0, 0}, records = 0;
     size_t at = 0;
-    r->line = 0;
-    if (memchr(text, '\0', len) != NULL) {
-        r->line = 1;
-        return ev_error(r, "not an rcsc event file (it holds a NUL byte); %s", hint);
+    r->line = 1;
+    if (strncmp(text, "rcsc-events ", 12) != 0) return ev_error(r, "not an rcsc event file; %s", hint);
+    for (size_t i = 0; i < len; i++) {
+        const unsigned char c = (unsigned char)text[i];
+        if (c == '\n')
+            r->line++;
+        else if (c < 0x20u || c > 0x7eu)
+            return ev_error(r, "byte 0x%02x is not printable ASCII", (unsigned)c);
     }
+    r->line = 0;
     for (;;) {
         r->line++;
         char *nl = at < len ? memchr(text + at, '\n', len - at) : NULL;
-        if (nl == NULL) {
-            if (r->line <= 2 && strncmp(text, "rcsc-events ", 12) != 0) return ev_error(r, "not an rcsc event file; %s", hint);
-            return ev_error(r, "the file is truncated (no `end` line)");
-        }
+        if (nl == NULL) return ev_error(r, "the file is truncated (no `end` line)");
         *nl = '\0';
         char *s = text + at;
         at = (size_t)(nl - text) + 1;
         if (r->line == 1) {
             uint64_t version;
-            if (strncmp(s, "rcsc-events ", 12) != 0) return ev_error(r, "not an rcsc event file; %s", hint);
             if (!ev_split(r, s)) return 0;
             if (r->n != 4) return ev_error(r, "not an rcsc event file; %s", hint);
             if (!ev_number(r, 1, 10, &version)) return 0;

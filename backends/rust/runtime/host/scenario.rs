@@ -164,10 +164,21 @@ impl Scenario {
             line,
             message: format!("not an rcsc event file{why}; {HINT}"),
         };
-        if bytes.contains(&0) {
-            return Err(not_ours(1, " (it holds a NUL byte)"));
+        if !bytes.starts_with(b"rcsc-events ") {
+            return Err(not_ours(1, ""));
         }
-        let text = std::str::from_utf8(bytes).map_err(|_| not_ours(1, " (it is not text)"))?;
+        let mut at = 1;
+        for &b in bytes {
+            if b == b'\n' {
+                at += 1;
+            } else if !(0x20..=0x7e).contains(&b) {
+                return Err(ScnError {
+                    line: at,
+                    message: format!("byte 0x{b:02x} is not printable ASCII"),
+                });
+            }
+        }
+        let text = std::str::from_utf8(bytes).map_err(|_| not_ours(1, ""))?;
         let mut sc = Scenario {
             cycles: 0,
             inputs: Vec::new(),
@@ -183,18 +194,12 @@ impl Scenario {
         loop {
             no += 1;
             let Some((s, after)) = rest.split_once('\n') else {
-                if no <= 2 && !text.starts_with("rcsc-events ") {
-                    return Err(not_ours(no, ""));
-                }
                 return Err(ScnError {
                     line: no,
                     message: "the file is truncated (no `end` line)".to_string(),
                 });
             };
             rest = after;
-            if no == 1 && !s.starts_with("rcsc-events ") {
-                return Err(not_ours(1, ""));
-            }
             let line = split(no, s)?;
             if no == 1 {
                 if line.w.len() != 4 {
