@@ -62,6 +62,7 @@ class Prepared:
     folder: Path
     design: Path
     scenario: Path
+    events: Path | None = None  # the scenario compiled for the Main Programs (`rcsc events`)
     reference: bytes = b""
     findings: list[Finding] = field(default_factory=list)
 
@@ -100,6 +101,11 @@ def prepare(case: Case, base: Path) -> Prepared:
     if sc is None or diags.has_errors():
         p.findings.append(Finding(case.seed, "invalid", "rcsc", "\n".join(d.message for d in diags.errors)))
         return p
+    from rcsc.outputs.backend import BuildOptions, built_controllers
+    from rcsc.outputs.events import event_text
+
+    p.events = folder / f"{case.name}.events"
+    p.events.write_text(event_text(result.model, sc, built_controllers(result.model, BuildOptions())), encoding="utf-8")
     try:
         run = run_scenario(result.model, sc)
         p.reference = to_jsonl(result.model, run.snapshots).encode("utf-8")
@@ -120,7 +126,7 @@ def run_program(p: Prepared, exe: Path, where: str) -> list[Finding]:
     trace = exe.with_suffix(".jsonl")
     env = dict(os.environ, ASAN_OPTIONS="detect_leaks=1", UBSAN_OPTIONS="print_stacktrace=1")
     try:
-        proc = subprocess.run([str(exe), "--fast", "--no-console", "--no-timing", "--scenario", str(p.scenario),
+        proc = subprocess.run([str(exe), "--fast", "--no-console", "--no-timing", "--scenario", str(p.events),
                                "--trace", str(trace)], capture_output=True, text=True, timeout=120, env=env,
                               stdin=subprocess.DEVNULL)
     except subprocess.TimeoutExpired:

@@ -398,12 +398,55 @@ def _run_sim(args: argparse.Namespace) -> int:
 
 
 # ---------------------------------------------------------------------------
+# rcsc events
+# ---------------------------------------------------------------------------
+
+def _add_events_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("path", metavar="DESIGN", help="the design's root file")
+    p.add_argument("scenario", metavar="SCENARIO", help="the scenario to compile (see docs/scenarios.md)")
+    p.add_argument("-o", "--output", metavar="FILE", help="write the event file to FILE instead of stdout (see docs/events.md)")
+    p.add_argument(
+        "--exclude-simulators", action="store_true", help="for a deployment build (`rcsc build --exclude-simulators`)"
+    )
+
+
+def _run_events(args: argparse.Namespace) -> int:
+    from rcsc.front.scenario import text_to_scenario
+    from rcsc.front.source import SourceFile
+    from rcsc.outputs import backend
+    from rcsc.outputs.events import event_text
+
+    result = _check(args.path)
+    if not result.ok or result.model is None:
+        _report_to_stderr(result.diags)
+        return EXIT_FINDINGS
+    design = result.model
+    try:
+        text = safeio.read_input(args.scenario).decode("utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise UsageError(f"{args.scenario}: cannot read: {getattr(exc, 'strerror', None) or exc}") from exc
+    diags = Diagnostics()
+    sc = text_to_scenario(SourceFile(args.scenario, text), design, diags)
+    if sc is None:
+        _report_to_stderr(diags)
+        return EXIT_FINDINGS
+    ctrls = backend.built_controllers(design, backend.BuildOptions(exclude_simulators=args.exclude_simulators))
+    _emit_report(event_text(design, sc, ctrls), args.output)
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------
 # rcsc test
 # ---------------------------------------------------------------------------
 
 def _add_test_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("paths", metavar="PATH", nargs="*", default=["."], help="design files, scenario files or folders (default: .)")
     p.add_argument("--junit", metavar="FILE", help="also write a JUnit XML report to FILE")
+    p.add_argument(
+        "--target", choices=("sim", "c", "rust"), default="sim",
+        help="run the scenarios in the simulator (default) or on the compiled Main Program (built once, see docs/events.md)",
+    )
+    p.add_argument("--build-dir", metavar="DIR", default="build/rcsc-test", help="where --target c|rust builds the design (default: build/rcsc-test)")
 
 
 def _run_test(args: argparse.Namespace) -> int:
@@ -418,7 +461,7 @@ def _run_test(args: argparse.Namespace) -> int:
         if not scenarios:
             continue
         for scn in scenarios:
-            outcome = testrun.run_one(design, scn, cache)
+            outcome = testrun.run_one(design, scn, cache, args.target, args.build_dir)
             report.outcomes.append(outcome)
             word = "PASS" if outcome.passed else "FAIL"
             unit = "ticks" if outcome.result is not None and outcome.result.multi_cpu else "cycles"
@@ -732,6 +775,7 @@ COMMANDS: dict[str, Command] = {
     "check": Command("check designs (files, folders, globs) and report findings", _add_check_arguments, _run_check),
     "explain": Command("explain a diagnostic code", _add_explain_arguments, _run_explain),
     "sim": Command("run a scenario in the reference simulator and write its trace", _add_sim_arguments, _run_sim),
+    "events": Command("compile a scenario into the event file a compiled Main Program reads", _add_events_arguments, _run_events),
     "test": Command("run scenarios with expectations, like a test runner", _add_test_arguments, _run_test),
     "budget": Command("print each CPU's timing table (budgets against the heartbeat)", _add_budget_arguments, _run_budget),
     "graph": Command("draw the hierarchy, the data flow or a plan (DOT, SVG, PNG, Mermaid)", _add_graph_arguments, _run_graph),

@@ -167,10 +167,30 @@ class Builds:
         return self.binaries[key]
 
 
-def run_main(exe: Path, scn: Path, trace: Path, *extra: str, timeout: float = 300) -> subprocess.CompletedProcess:
+_EVENTS: dict[tuple[Path, Path, bool], Path] = {}
+
+
+def event_file(design: Path, scn: Path, exclude_simulators: bool = False) -> Path:
+    """`rcsc events DESIGN SCN`: the event file the compiled Main Programs read (cached per session)."""
+    key = (design, scn, exclude_simulators)
+    if key not in _EVENTS:
+        import tempfile
+
+        out = Path(tempfile.mkdtemp(prefix="rcsc-events-")) / (scn.stem + ".events")
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            rc = cli.main(["events", str(design), str(scn), "-o", str(out), *(["--exclude-simulators"] if exclude_simulators else [])])
+        assert rc == 0, f"rcsc events failed ({rc}):\n{err.getvalue()}"
+        _EVENTS[key] = out
+    return _EVENTS[key]
+
+
+def run_main(exe: Path, design: Path, scn: Path, trace: Path, *extra: str, timeout: float = 300) -> subprocess.CompletedProcess:
+    """The Main Program `exe` on scenario `scn` of `design` (compiled to its event file first)."""
     env = dict(os.environ, ASAN_OPTIONS="detect_leaks=1:abort_on_error=0", UBSAN_OPTIONS="print_stacktrace=1")
+    events = event_file(design, scn)
     return subprocess.run(
-        [str(exe), "--fast", "--no-console", "--no-timing", "--scenario", str(scn), "--trace", str(trace), *extra],
+        [str(exe), "--fast", "--no-console", "--no-timing", "--scenario", str(events), "--trace", str(trace), *extra],
         capture_output=True, text=True, timeout=timeout, env=env, stdin=subprocess.DEVNULL,
     )
 

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from c_build import C_CONFIGS, CONFORMANCE, ROOT, Builds, Console, case_id, first_difference, generate, reference_trace, run_main
+from c_build import C_CONFIGS, CONFORMANCE, ROOT, Builds, Console, case_id, event_file, first_difference, generate, reference_trace, run_main
 
 SUBMARINE = ROOT / "examples/submarine/submarine.rcs"
 CELL = ROOT / "examples/machining_cell/machining_cell.rcs"
@@ -34,7 +34,7 @@ def test_trace_equals_simulator(builds: Builds, pair, config: str, tmp_path: Pat
     design, scn = pair
     exe = builds.c_binary(design, config)
     trace = tmp_path / "trace.jsonl"
-    proc = run_main(exe, scn, trace)
+    proc = run_main(exe, design, scn, trace)
     assert proc.returncode == 0, f"exit {proc.returncode}:\n{proc.stderr[-3000:]}"
     assert proc.stderr == "", f"the program printed diagnostics (sanitizer?):\n{proc.stderr[-3000:]}"
     expected = reference_trace(design, scn)
@@ -138,7 +138,7 @@ def test_make_and_cmake_build_the_main_program(builds: Builds, tmp_path: Path) -
     assert proc.returncode == 0, proc.stdout + proc.stderr
     scn = ROOT / "examples/submarine/scenarios/trip_at_init.scn"
     out = tmp_path / "t.jsonl"
-    assert run_main(cm / "submarine_MAIN", scn, out).returncode == 0
+    assert run_main(cm / "submarine_MAIN", SUBMARINE, scn, out).returncode == 0
     assert out.read_bytes() == reference_trace(SUBMARINE, scn)
 
 
@@ -173,13 +173,16 @@ def test_realtime_runs_or_says_what_is_missing(builds: Builds) -> None:
         assert proc.returncode == 2 and "--realtime" in proc.stderr and "not permitted" in proc.stderr, proc.stderr
 
 
-def test_bad_scenario_is_reported_with_its_position(builds: Builds, tmp_path: Path) -> None:
+def test_bad_event_file_is_reported_with_its_line(builds: Builds, tmp_path: Path) -> None:
+    """A command to a controller with a supervisor (PR is controller 1): refused, with the line."""
     exe = builds.c_binary(SUBMARINE, "gcc-O2")
-    scn = tmp_path / "bad.scn"
-    scn.write_text("cycles 10\nat 1: PR.AHEAD(speed = 3.0)\n", encoding="utf-8")
-    proc = run_main(exe, scn, tmp_path / "t.jsonl")
+    good = event_file(SUBMARINE, ROOT / "examples/submarine/scenarios/trip_at_init.scn").read_text(encoding="utf-8")
+    head = good.splitlines()[0]
+    bad = tmp_path / "bad.events"
+    bad.write_text(f"{head}\ncycles 10\ncommand 1 1 0 1 4008000000000000\nend 1\n", encoding="utf-8")
+    proc = subprocess.run([str(exe), "--fast", "--no-console", "--scenario", str(bad)], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2
-    assert f"{scn}:2:7: error:" in proc.stderr and "supervisor" in proc.stderr, proc.stderr
+    assert proc.stderr == f"{bad}:3: error: `PR` takes commands only from its supervisor\n", proc.stderr
 
 
 def test_console_pause_single_step_and_quit(builds: Builds) -> None:

@@ -3,7 +3,7 @@
 Built with a hand-made design (tests/c/runtime_fixture.c, described at its
 top) under the strict warning flags, with gcc and, when installed, clang; run
 on scenarios written here.  Checks the exact trace lines (and that they are
-what rcsc/sim/trace.py writes for the same values), the exact scenario errors,
+what rcsc/sim/trace.py writes for the same values), the exact event-file errors,
 the options, the timing table, SIGINT, the console on a pseudo-terminal,
 real-time mode refused without privileges, and a clean run under UBSan and
 ASan.
@@ -26,6 +26,7 @@ from pathlib import Path
 
 import pytest
 
+from event_cases import COMPUTED, event_errors, events, fixture_hash, mutations
 from rcsc.sim import trace
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -65,11 +66,12 @@ def san_exe(tmp_path_factory) -> Path:
     return _compile(COMPILERS[0], SANITIZE, tmp_path_factory.mktemp("crt_san") / "fixture_san")
 
 
-def run(exe: Path, tmp_path: Path, scenario: str | None, *args: str, name: str = "s.scn", env=None):
+def run(exe: Path, tmp_path: Path, scenario: str | bytes | None, *args: str, name: str = "s.events", env=None):
+    """The fixture on a scenario (text: compiled by `rcsc events` first) or on an event file's bytes."""
     cmd = [str(exe), "--fast", "--no-console", "--no-timing"]
     if scenario is not None:
         path = tmp_path / name
-        path.write_text(scenario, encoding="utf-8")
+        path.write_bytes(scenario if isinstance(scenario, bytes) else events(scenario).encode("utf-8"))
         cmd += ["--scenario", str(path)]
     cmd += list(args)
     return subprocess.run(cmd, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=20, env=env)
@@ -224,146 +226,29 @@ def test_trace_to_a_file(exe, tmp_path):
     assert out.read_text() == "".join(line + "\n" for line in GOOD_TRACE)
 
 
-# ---- scenario errors -------------------------------------------------------------
+# ---- event files ----------------------------------------------------------------
+# The scenario grammar and its checks are rcsc's (rcsc/front/scenario.py); the
+# Main Program reads the event file `rcsc events` makes of it (docs/events.md).
 
-UNSUPPORTED = (
-    "the compiled Main Program reads only literals, constants, enum members and record constructors as "
-    "scenario values; run this scenario with `rcsc sim`"
-)
+def test_fixture_carries_the_interface_hash_of_its_design():
+    """The hand-made tables carry the hash rcsc computes for the same declarations."""
+    assert f'"{fixture_hash()}"' in FIXTURE.read_text(encoding="utf-8")
 
-# (scenario body after `cycles 5`, expected "LINE:COL: error: message").  The
-# positions and messages are those of `rcsc sim` (rcsc/front/scenario.py) except
-# where noted; the C reader stops at the first error.
-ERRORS = {
-    "unknown_ctrl": ("at 1: NOPE.INIT()", "2:7: error: no controller named `NOPE`"),
-    "not_top": ("at 1: SUB.GO()", "2:7: error: `SUB` takes commands only from its supervisor"),
-    "unknown_verb": ("at 1: TOP.FLY()", "2:11: error: `TOP` does not accept the verb `FLY`"),
-    "missing_args": ("at 1: TOP.MOVE(speed = 1.0)", "2:1: error: `TOP.MOVE` takes 4 arguments, 1 given (missing `dt`, `mode`, `to`)"),
-    "unknown_arg": (
-        "at 1: TOP.MOVE(sped = 1.0, dt = 1 s, mode = Mode.RUN, to = HOME)",
-        "2:16: error: `TOP.MOVE` has no parameter `sped`",
-    ),
-    "duplicate_arg": ("at 1: TOP.MOVE(1.0, speed = 2.0, dt = 1 s, mode = Mode.RUN, to = HOME)", "2:21: error: parameter `speed` given twice"),
-    "positional_after_named": ("at 1: TOP.MOVE(speed = 1.0, 2 s, Mode.RUN, HOME)", "2:29: error: positional argument after a named one"),
-    "extra_positional": ("at 1: TOP.SET(1, 2, 3)", "2:21: error: `TOP.SET` takes 2 arguments, 3 given"),
-    "duration_needs_unit": (
-        "at 1: TOP.MOVE(1.0, 5, Mode.RUN, HOME)",
-        "2:21: error: mismatched types: expected `duration`, found `i32` (a duration needs a unit: `us`, `ms` or `s`)",
-    ),
-    "f64_not_duration": ("at 1: TOP.MOVE(5 s, 5 s, Mode.RUN, HOME)", "2:16: error: mismatched types: expected `f64`, found `duration`"),
-    "no_int_const_for_f64": ("at 1: TOP.MOVE(LIMIT_K, 5 s, Mode.RUN, HOME)", "2:16: error: mismatched types: expected `f64`, found `i32`"),
-    "i32_const_for_i64": ("at 1: TOP.SET(n = NEG_U, big = LIMIT_K)", "2:32: error: mismatched types: expected `i64`, found `i32`"),
-    "wrong_enum": ("at 1: TOP.MOVE(1.0, 5 s, Color.RED, HOME)", "2:26: error: mismatched types: expected `Mode`, found `Color`"),
-    "no_member": ("at 1: TOP.MOVE(1.0, 5 s, Mode.FOO, HOME)", "2:31: error: enum `Mode` has no member `FOO`"),
-    "record_field_type": (
-        "at 1: TOP.MOVE(1.0, 1 s, Mode.RUN, Pose(1.0, 2.0, Color.RED))",
-        "2:51: error: mismatched types: expected `Mode`, found `Color`",
-    ),
-    "record_missing_field": (
-        "at 1: TOP.MOVE(1.0, 1 s, Mode.RUN, Pose(x = 1.0))",
-        "2:36: error: record `Pose` takes 3 arguments, 1 given (missing `y`, `mode`)",
-    ),
-    "record_unknown_field": (
-        "at 1: TOP.MOVE(1.0, 1 s, Mode.RUN, Pose(x = 1.0, z = 2.0, mode = Mode.RUN))",
-        "2:50: error: record `Pose` has no field `z`",
-    ),
-    "u32_negative": ("at 1: TOP.SET(n = -1, big = 0)", "2:19: error: integer literal out of range for `u32` (`u32` holds 0..4294967295)"),
-    "u32_too_big": ("at 1: TOP.SET(n = 4294967296, big = 0)", "2:19: error: integer literal out of range for `u32` (`u32` holds 0..4294967295)"),
-    "i64_too_big": (
-        "at 1: TOP.SET(n = 1, big = 9223372036854775808)",
-        "2:28: error: integer literal out of range for `i64` (`i64` holds -9223372036854775808..9223372036854775807)",
-    ),
-    "i32_too_small": ("at 1: limit = -2147483649", "2:15: error: integer literal out of range for `i32` (`i32` holds -2147483648..2147483647)"),
-    "float_for_bool": ("at 1: door = 1.0", "2:14: error: mismatched types: expected `bool`, found `f64`"),
-    "int_for_bool": ("at 1: door = 1", "2:14: error: mismatched types: expected `bool`, found `i32`"),
-    "bool_for_f64": ("at 1: gain = true", "2:14: error: mismatched types: expected `f64`, found `bool`"),
-    "float_for_i32": ("at 1: limit = 1.0", "2:15: error: mismatched types: expected `i32`, found `f64`"),
-    "negate_bool": ("at 1: door = -true", "2:14: error: cannot negate a value of type `bool`"),
-    "negate_enum": ("at 1: TOP.MOVE(1.0, 1 s, -Mode.RUN, HOME)", "2:26: error: cannot negate a value of type `Mode`"),
-    "unknown_const": ("at 1: gain = NOPE", "2:14: error: cannot find `NOPE` in this scope"),
-    "variable_as_value": ("at 1: gain = limit", "2:14: error: cannot find `limit` in this scope"),
-    "unknown_gm": ("at 1: nope = 1", "2:7: error: no Global Memory variable named `nope`"),
-    "not_from_env": ("at 1: mode = Mode.RUN", "2:7: error: `mode` is written by a controller, not by the environment"),
-    "cycle_after_end": ("at 9: TOP.INIT()", "2:4: error: cycle 9 is outside the scenario's cycles 1..5"),
-    "cycle_zero": ("at 0: limit = 1", "2:4: error: cycle 0 is outside the scenario's cycles 1..5"),
-    "expect_after_end": ("expect at 9: TOP.done", "2:1: error: cycle 9 is outside the scenario's cycles 1..5"),
-    "empty_window": ("expect within 4..2: TOP.done", "2:8: error: empty window: 4 is after 2"),
-    "cycles_twice": ("cycles 6", "2:1: error: `cycles` is given more than once"),
-    "fraction_of_ns": ("at 1: TOP.MOVE(1.0, 0.0000000001 s, Mode.RUN, HOME)", "2:21: error: duration is not a whole number of nanoseconds"),
-    "duration_too_long": (
-        "at 1: TOP.MOVE(1.0, 9300000000 s, Mode.RUN, HOME)",
-        "2:21: error: duration literal out of range for `duration` (at most 9223372036854775807 ns)",
-    ),
-    # Columns count characters: a tab and a two-byte UTF-8 character are one each.
-    "columns_in_characters": ("/* \u00e9 */\tat 1: NOPE.INIT()", "2:15: error: no controller named `NOPE`"),
-    "bad_character": ("at 1: gain = 1.0 @", "2:18: error: unexpected character `@`"),
-    # Syntax errors: rcsc says "syntax error: unexpected ..." at the same place.
-    "missing_colon": ("at 1 TOP.INIT()", "2:6: error: syntax error: expected `:`, found `TOP`"),
-    "empty_argument": ("at 1: TOP.SET(1,,2)", "2:17: error: syntax error: expected a value, found `,`"),
-    "unclosed_call": ("at 1: TOP.MOVE(1.0, 1 s, Mode.RUN, HOME", "3:1: error: syntax error: expected `,` or `)`, found end of file"),
-    "unterminated_comment": ("at 1: TOP.INIT() /* no end", "2:18: error: unterminated comment"),
-    # Beyond what the compiled program reads (rcsc sim accepts these).
-    "arithmetic": ("at 1: gain = 2.0 * 3.0", "2:14: error: " + UNSUPPORTED),
-    "arithmetic_in_parens": ("at 1: gain = (1.0 + 2.0)", "2:15: error: " + UNSUPPORTED),
-    "function_call": ("at 1: TOP.MOVE(abs(1.0), 1 s, Mode.RUN, HOME)", "2:16: error: " + UNSUPPORTED),
-    "record_constant_field": ("at 1: gain = HOME.x", "2:14: error: " + UNSUPPORTED),
-    "conditional": ("at 1: door = not true", "2:14: error: " + UNSUPPORTED),
-    "stray_word": ("stop 5", "2:1: error: syntax error: unexpected `stop` (expected `scenario`, `cycles`, `at` or `expect`)"),
-    "bad_when": ("expect soon: TOP.done", "2:8: error: syntax error: expected `at`, `within`, `final` or `always`, found `soon`"),
-}
-NOT_IN_RCSC = {"arithmetic", "arithmetic_in_parens", "function_call", "record_constant_field", "conditional"}
 
-# The fixture's declarations in the design language, to compare with `rcsc sim`.
-FIXTURE_RCS = """\
-design fixture
-enum Mode { IDLE, RUN, HALT }
-enum Color { RED, GREEN }
-record Pose { x: f64, y: f64, mode: Mode }
-const MAX_SPEED: f64 = 12.5
-const LIMIT_K: i32 = 7
-const STEP_T: duration = 250 ms
-const FAST: Mode = Mode.RUN
-const HOME: Pose = Pose(x = 1.0, y = 2.0, mode = Mode.RUN)
-const NEG_U: u32 = 5
-gm pose: Pose = Pose(x = 0.0, y = 0.0, mode = Mode.IDLE)
-gm mode: Mode = Mode.IDLE
-gm door: bool = false from env
-gm limit: i32 = 0 from env
-gm gain: f64 = 0.0 from env
-controller TOP level 2 budget 1 ms {
-    subordinates SUB
-    reads door, limit, gain, pose, mode
-    writes pose, mode
-    verb INIT
-    verb MOVE(speed: f64, dt: duration, mode: Mode, to: Pose)
-    verb SET(n: u32, big: i64)
-    reports AT_GOAL
-    status speed: f64 = 0.0
-    status n: u32 = 0
-    plan INIT { N0: true | new -> done; }
-    plan MOVE continuous { N0: true | new -> MOVING | speed = cmd.speed; A1: true | MOVING -> MOVING | report AT_GOAL; }
-    plan SET { N0: true | new -> done; }
-}
-controller SUB level 1 budget 1 ms {
-    verb GO
-    plan GO { G0: true | new -> done; }
-}
-cpu MAIN {
-    heartbeat 10 ms
-    schedule SUB, TOP
-}
-"""
+def test_computed_values(exe, tmp_path):
+    r = run(exe, tmp_path, COMPUTED, "--trace", "-")
+    assert (r.returncode, r.stderr) == (0, "")
+    first = json.loads(r.stdout.splitlines()[0])
+    assert first["gm"]["gain"] == 9.375
+    assert first["ctrl"]["TOP"]["fields"]["speed"] == 9.375 and first["ctrl"]["TOP"]["fields"]["dt"] == 251000000
+    assert first["ctrl"]["TOP"]["fields"]["target"] == {"x": 2, "y": 3, "mode": "HALT"}
 
 
 @pytest.fixture(scope="module")
-def rcsc_design(tmp_path_factory):
-    from rcsc.driver import check_path
+def rcsc_design():
+    from event_cases import fixture_model
 
-    path = tmp_path_factory.mktemp("rcs") / "fixture.rcs"
-    path.write_text(FIXTURE_RCS)
-    result = check_path(str(path))
-    assert result.ok and result.model is not None
-    return result.model
+    return fixture_model()
 
 
 def _rcsc_first_error(design, text: str):
@@ -374,13 +259,6 @@ def _rcsc_first_error(design, text: str):
     diags = Diagnostics()
     sc = text_to_scenario(SourceFile("s.scn", text), design, diags)
     return sc, (f"{diags.errors[0].span.line}:{diags.errors[0].span.col}" if diags.errors else None)
-
-
-@pytest.mark.parametrize("name", [n for n in ERRORS if n not in NOT_IN_RCSC])
-def test_error_positions_are_those_of_rcsc(rcsc_design, name):
-    body, message = ERRORS[name]
-    _, where = _rcsc_first_error(rcsc_design, "cycles 5\n" + body + "\n")
-    assert where == message.split(": ", 1)[0]
 
 
 def test_rcsc_reads_the_same_values(rcsc_design):
@@ -404,38 +282,25 @@ def test_rcsc_reads_the_same_values(rcsc_design):
     ]
 
 
-@pytest.mark.parametrize("name", list(ERRORS))
-def test_scenario_error(exe, tmp_path, name):
-    body, message = ERRORS[name]
-    r = run(exe, tmp_path, "cycles 5\n" + body + "\n", "--trace", "-", name=f"{name}.scn")
+@pytest.mark.parametrize("name,text,message", event_errors(), ids=[c[0] for c in event_errors()])
+def test_event_file_errors(exe, tmp_path, name, text, message):
+    r = run(exe, tmp_path, text, "--trace", "-", name=f"{name}.events")
     assert (r.returncode, r.stdout) == (2, "")
-    assert r.stderr == f"{tmp_path / (name + '.scn')}:{message}\n"
+    assert r.stderr == f"{tmp_path / (name + '.events')}:{message}\n"
 
 
-def test_scenario_file_level_errors(exe, tmp_path):
-    r = run(exe, tmp_path, "at 1: TOP.INIT()\n", name="a.scn")
-    assert (r.returncode, r.stderr) == (
-        2,
-        f"{tmp_path / 'a.scn'}:1:1: error: the scenario does not say how many cycles to run (add a line such as `cycles 200`)\n",
-    )
-    r = run(exe, tmp_path, "// none\ncycles 0\n", name="b.scn")
-    assert (r.returncode, r.stderr) == (2, f"{tmp_path / 'b.scn'}:2:8: error: a scenario runs at least one cycle\n")
-    r = subprocess.run([str(exe), "--scenario", str(tmp_path / "missing.scn")], capture_output=True, text=True)
-    assert (r.returncode, r.stderr) == (2, f"{tmp_path / 'missing.scn'}: error: cannot read the scenario: No such file or directory\n")
+def test_unreadable_event_file(exe, tmp_path):
+    r = subprocess.run([str(exe), "--scenario", str(tmp_path / "missing.events")], capture_output=True, text=True)
+    assert (r.returncode, r.stderr) == (2, f"{tmp_path / 'missing.events'}: error: cannot read the event file: No such file or directory\n")
 
 
-def _scenario_files():
-    return sorted(ROOT.glob("examples/*/scenarios/*.scn")) + sorted(ROOT.glob("tests/sim/*.scn"))
-
-
-@pytest.mark.parametrize("path", _scenario_files(), ids=lambda p: p.name)
-def test_expectations_of_real_scenarios_are_skipped(exe, tmp_path, path):
-    """The repository's scenarios without their commands and inputs (which name
-    other designs) read cleanly: every `expect` condition is skipped."""
-    text = "".join(line for line in path.read_text().splitlines(keepends=True) if not re.match(r"\s*at\s+\d", line))
-    r = run(exe, tmp_path, text, "--cycles", "1", "--trace", "-", name=path.name)
-    assert (r.returncode, r.stderr) == (0, "")
-    assert r.stdout.count("\n") == 1
+def test_every_truncation_is_refused(exe, tmp_path):
+    """Each proper prefix of a good event file: exit 2 with one error line, never a crash."""
+    data = events(GOOD).encode("utf-8")
+    for n in range(len(data)):
+        r = run(exe, tmp_path, data[:n], "--trace", "-")
+        assert (r.returncode, r.stdout, r.stderr.count("\n")) == (2, "", 1), (n, r.stderr)
+        assert ": error: " in r.stderr
 
 
 # ---- options ---------------------------------------------------------------------
@@ -589,10 +454,18 @@ def test_clean_under_ubsan_and_asan(san_exe, tmp_path):
     r = run(san_exe, tmp_path, VALUES, "--trace", "-", env=env)
     assert (r.returncode, r.stderr) == (0, "")
     assert r.stdout == "".join(line + "\n" for line in VALUES_TRACE)
-    for name in ("missing_args", "record_field_type", "arithmetic", "fraction_of_ns", "unclosed_call", "bad_character", "columns_in_characters"):
-        body, message = ERRORS[name]
-        r = run(san_exe, tmp_path, "cycles 5\n" + body + "\n", name=f"{name}.scn", env=env)
-        assert (r.returncode, r.stderr) == (2, f"{tmp_path / (name + '.scn')}:{message}\n")
+    for name, text, message in event_errors():
+        r = run(san_exe, tmp_path, text, name=f"{name}.events", env=env)
+        assert (r.returncode, r.stderr) == (2, f"{tmp_path / (name + '.events')}:{message}\n")
+    data = events(GOOD).encode("utf-8")
+    for n in range(0, len(data), 7):
+        r = run(san_exe, tmp_path, data[:n], env=env)
+        assert r.returncode == 2 and r.stderr.count("\n") == 1, (n, r.stderr)
+    for k, bad in enumerate(mutations(events(GOOD).encode("utf-8"), 150)):
+        r = run(san_exe, tmp_path, bad, "--trace", "-", env=env)
+        # a mutation may still be a valid file (another value): it runs, else one error line
+        assert (r.returncode, r.stderr.count("\n")) in ((0, 0), (2, 1)), (k, bad, r.stderr)
+        assert r.returncode == 0 or ": error: " in r.stderr
     r = subprocess.run([str(san_exe), "--cycles", "3", "--no-console"], capture_output=True, text=True, env=env, stdin=subprocess.DEVNULL)
     assert r.returncode == 0 and r.stderr.startswith("rcs: timing of fixture on MAIN, 3 cycles")
     r = subprocess.run([str(san_exe), "--bogus"], capture_output=True, text=True, env=env)

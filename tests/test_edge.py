@@ -162,7 +162,7 @@ def test_a_design_file_name_with_odd_characters_builds_clean(tmp_path: Path) -> 
         exe = tmp_path / f"odd-{cc}"
         compile_c(c_out, cc, ["-O0"], exe)
         trace = tmp_path / f"{cc}.jsonl"
-        assert run_main(exe, scn, trace).returncode == 0
+        assert run_main(exe, design, scn, trace).returncode == 0
         assert trace.read_bytes() == reference_trace(EDGE, scn)
     rust_out = tmp_path / "rust"
     generate(design, "rust", rust_out)

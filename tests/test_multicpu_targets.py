@@ -32,7 +32,7 @@ from pathlib import Path
 
 import pytest
 
-from c_build import first_difference, generate, multi_cpu_examples
+from c_build import event_file, first_difference, generate, multi_cpu_examples
 
 from rcsc import cli
 
@@ -118,7 +118,7 @@ def test_lockstep_trace_equals_simulator(c_builds, case, config, tmp_path):
     folder = c_builds(design, config)
     name = next(p.name for p in folder.glob("run_*") if "." not in p.name)[4:]
     trace = tmp_path / "c.jsonl"
-    r = launch(folder, name, "--lockstep", "--no-timing", "--scenario", str(scn), "--trace", str(trace))
+    r = launch(folder, name, "--lockstep", "--no-timing", "--scenario", str(event_file(design, scn)), "--trace", str(trace))
     assert r.returncode == 0, r.stderr
     want = sim_trace(design, scn, tmp_path)
     got = trace.read_bytes()
@@ -175,7 +175,7 @@ def test_rust_lockstep_trace_equals_simulator(rust_builds, case, tmp_path):
     folder = rust_builds(design)
     name = next(p.name for p in folder.glob("run_*") if "." not in p.name)[4:]
     trace = tmp_path / "rust.jsonl"
-    r = launch(folder, name, "--lockstep", "--no-timing", "--scenario", str(scn), "--trace", str(trace))
+    r = launch(folder, name, "--lockstep", "--no-timing", "--scenario", str(event_file(design, scn)), "--trace", str(trace))
     assert r.returncode == 0, r.stderr
     want = sim_trace(design, scn, tmp_path)
     got = trace.read_bytes()
@@ -230,7 +230,7 @@ def test_realtime_run_equals_simulator(c_builds, rust_builds, target, tmp_path):
     for attempt in range(3):
         trace = tmp_path / f"rt{attempt}.jsonl"
         t0 = time.monotonic()
-        r = launch(folder, "twocpu", "--scenario", str(scn), "--trace", str(trace))
+        r = launch(folder, "twocpu", "--scenario", str(event_file(TWOCPU, scn)), "--trace", str(trace))
         elapsed = time.monotonic() - t0
         assert r.returncode == 0, r.stderr
         assert elapsed >= 2.0, f"a real-time run of 200 ticks of 10 ms took {elapsed:.2f} s"
@@ -326,8 +326,9 @@ def single_base(tmp_path_factory):
     return tmp_path_factory.mktemp("single")
 
 
-def _run_single(exe: Path, scn: Path, trace: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([str(exe), "--fast", "--no-console", "--no-timing", "--scenario", str(scn), "--trace", str(trace)], capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
+def _run_single(exe: Path, design: Path, scn: Path, trace: Path) -> subprocess.CompletedProcess:
+    events = event_file(design, scn)
+    return subprocess.run([str(exe), "--fast", "--no-console", "--no-timing", "--scenario", str(events), "--trace", str(trace)], capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
 
 
 @pytest.mark.parametrize("config", list(C_CONFIGS))
@@ -336,7 +337,7 @@ def test_single_cpu_divided_rate_ages_and_freeze(single_base, case, config, tmp_
     """One CPU: a `period` controller, age(V) of Global Memory and of a subordinate, `freeze`."""
     design, scn = case
     exe = _single_c(single_base, config)
-    r = _run_single(exe, scn, tmp_path / "c.jsonl")
+    r = _run_single(exe, design, scn, tmp_path / "c.jsonl")
     assert r.returncode == 0, r.stderr
     want = sim_trace(design, scn, tmp_path)
     got = (tmp_path / "c.jsonl").read_bytes()
@@ -349,7 +350,7 @@ def test_single_cpu_stop_ends_the_run(single_base, rust_single, tmp_path):
     want = sim_trace(SINGLE, scn, tmp_path)
     assert want.count(b"\n") == 29 and b'{"cycle":29,' in want.splitlines()[-1]
     for exe in (_single_c(single_base, "gcc-O2"), rust_single):
-        r = _run_single(exe, scn, tmp_path / "t.jsonl")
+        r = _run_single(exe, SINGLE, scn, tmp_path / "t.jsonl")
         assert r.returncode == 0, r.stderr
         got = (tmp_path / "t.jsonl").read_bytes()
         assert got == want, first_difference(got, want)
@@ -370,7 +371,7 @@ def rust_single(single_base):
 @pytest.mark.parametrize("case", SINGLE_CASES, ids=lambda c: c[1].stem)
 def test_rust_single_cpu_divided_rate_ages_and_freeze(rust_single, case, tmp_path):
     design, scn = case
-    r = _run_single(rust_single, scn, tmp_path / "r.jsonl")
+    r = _run_single(rust_single, design, scn, tmp_path / "r.jsonl")
     assert r.returncode == 0, r.stderr
     want = sim_trace(design, scn, tmp_path)
     got = (tmp_path / "r.jsonl").read_bytes()

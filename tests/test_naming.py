@@ -341,7 +341,7 @@ def test_hostile_design_in_c_equals_the_simulator(seed: int, tmp_path: Path) -> 
     exe = tmp_path / "prog"
     compile_c(out, "gcc", ["-O0"], exe)
     trace = tmp_path / "trace.jsonl"
-    proc = run_main(exe, scn, trace)
+    proc = run_main(exe, design, scn, trace)
     assert proc.returncode == 0, proc.stderr
     expected = reference_trace(design, scn)
     assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())
@@ -354,7 +354,7 @@ def test_hostile_design_in_rust_equals_the_simulator_and_is_lint_clean(seed: int
     crate = builds.source(design, "rust")
     exe = cargo_build(crate, "debug", builds.cargo_env(design))
     trace = tmp_path / "trace.jsonl"
-    proc = run_main(exe, scn, trace)
+    proc = run_main(exe, design, scn, trace)
     assert proc.returncode == 0, proc.stderr
     expected = reference_trace(design, scn)
     assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())
@@ -402,7 +402,7 @@ def test_a_design_named_like_its_controller_with_underscore_names(tmp_path: Path
     builds = Builds(tmp_path)
     for exe in (builds.c_binary(design, "gcc-O0"), builds.rust_binary(design, "debug")):
         trace = tmp_path / "trace.jsonl"
-        proc = run_main(exe, scn, trace)
+        proc = run_main(exe, design, scn, trace)
         assert proc.returncode == 0, proc.stderr
         assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())
     assert '"state":"done","rule":"x_"' in expected.decode().splitlines()[-1]

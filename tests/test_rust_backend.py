@@ -39,9 +39,9 @@ def builds(tmp_path_factory) -> Builds:
     return Builds(tmp_path_factory.mktemp("builds"))
 
 
-def _run(exe: Path, scn: Path, tmp_path: Path) -> bytes:
+def _run(exe: Path, design: Path, scn: Path, tmp_path: Path) -> bytes:
     trace = tmp_path / "trace.jsonl"
-    proc = run_main(exe, scn, trace)
+    proc = run_main(exe, design, scn, trace)
     assert proc.returncode == 0, f"exit {proc.returncode}:\n{proc.stderr[-3000:]}"
     assert proc.stderr == "", f"the program printed diagnostics:\n{proc.stderr[-3000:]}"
     return trace.read_bytes()
@@ -51,7 +51,7 @@ def _run(exe: Path, scn: Path, tmp_path: Path) -> bytes:
 @pytest.mark.parametrize("pair", PAIRS, ids=[case_id(p) for p in PAIRS])
 def test_trace_equals_simulator(builds: Builds, pair, profile: str, tmp_path: Path) -> None:
     design, scn = pair
-    got = _run(builds.rust_binary(design, profile), scn, tmp_path)
+    got = _run(builds.rust_binary(design, profile), design, scn, tmp_path)
     expected = reference_trace(design, scn)
     assert got == expected, first_difference(expected, got)
 
@@ -59,8 +59,8 @@ def test_trace_equals_simulator(builds: Builds, pair, profile: str, tmp_path: Pa
 @pytest.mark.parametrize("pair", CONFORMANCE, ids=[case_id(p) for p in CONFORMANCE])
 def test_trace_equals_c_main_program(builds: Builds, pair, tmp_path: Path) -> None:
     design, scn = pair
-    rust = _run(builds.rust_binary(design, "release"), scn, tmp_path)
-    c = _run(builds.c_binary(design, "gcc-O2"), scn, tmp_path)
+    rust = _run(builds.rust_binary(design, "release"), design, scn, tmp_path)
+    c = _run(builds.c_binary(design, "gcc-O2"), design, scn, tmp_path)
     assert rust == c, first_difference(c, rust)
 
 
@@ -223,7 +223,7 @@ def test_a_minimal_design_builds_clean(builds: Builds, tmp_path: Path) -> None:
     exe = cargo_build(crate, "debug", env)
     proc = subprocess.run(["cargo", "clippy", "--offline", "--all-targets", "--", "-D", "warnings"], cwd=crate, env=env, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr[-4000:]
-    assert _run(exe, tmp_path / "go.scn", tmp_path) == reference_trace(design, tmp_path / "go.scn")
+    assert _run(exe, design, tmp_path / "go.scn", tmp_path) == reference_trace(design, tmp_path / "go.scn")
 
 
 def test_abs_of_u32_imports_nothing(tmp_path: Path) -> None:
@@ -357,9 +357,9 @@ def test_rule_layouts_build_clean_and_conform(builds: Builds, tmp_path: Path) ->
     assert proc.returncode == 0, proc.stderr[-4000:]
     expected = reference_trace(design, scn)
     for profile in RUST_PROFILES:
-        got = _run(builds.rust_binary(design, profile), scn, tmp_path)
+        got = _run(builds.rust_binary(design, profile), design, scn, tmp_path)
         assert got == expected, first_difference(expected, got)
-    c = _run(builds.c_binary(design, "gcc-O2"), scn, tmp_path)
+    c = _run(builds.c_binary(design, "gcc-O2"), design, scn, tmp_path)
     assert c == expected, first_difference(expected, c)
 
 

@@ -7,7 +7,8 @@ binaries.  Here they are copied into a hand-made crate, tests/rust_fixture/
 debug and release (overflow checks on in both) and run:
 
 - the trace of a scenario, byte for byte (rcsc/sim/trace.py `jsonl_line`);
-- scenario errors as `FILE:LINE:COL: error: ...` with exit status 2;
+- event-file errors as `FILE:LINE: error: ...` with exit status 2 (the
+  scenario itself is compiled by `rcsc events`, tests/event_cases.py);
 - options, the timing table, the heartbeat, SIGINT, the console on a pty;
 - f64 formatting (`%.17g`) against Python's format() on thousands of values;
 - num.rs against rcsc/semantics/numeric.py on the edge cases;
@@ -34,6 +35,7 @@ from pathlib import Path
 import pytest
 
 from c_build import Console
+from event_cases import COMPUTED, event_errors, events, mutations
 
 from rcsc.semantics import numeric
 from rcsc.sim.trace import fmt_float
@@ -137,8 +139,8 @@ EXPECTED_TRACE = "".join(
 
 @pytest.mark.parametrize("profile", ["debug", "release"])
 def test_trace_of_a_scenario_byte_for_byte(crate: Crate, profile: str, tmp_path: Path) -> None:
-    scn = tmp_path / "run.scn"
-    scn.write_text(SCENARIO, encoding="utf-8")
+    scn = tmp_path / "run.events"
+    scn.write_text(events(SCENARIO), encoding="utf-8")
     proc = run_scenario(getattr(crate, profile), scn)
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr == ""
@@ -146,8 +148,8 @@ def test_trace_of_a_scenario_byte_for_byte(crate: Crate, profile: str, tmp_path:
 
 
 def test_trace_to_a_file_and_cycles_option(crate: Crate, tmp_path: Path) -> None:
-    scn = tmp_path / "run.scn"
-    scn.write_text(SCENARIO, encoding="utf-8")
+    scn = tmp_path / "run.events"
+    scn.write_text(events(SCENARIO), encoding="utf-8")
     out = tmp_path / "t.jsonl"
     proc = run(crate.debug, *RUN, "--scenario", str(scn), "--trace", str(out))
     assert proc.returncode == 0 and proc.stdout == "", proc.stderr
@@ -160,132 +162,46 @@ def test_trace_to_a_file_and_cycles_option(crate: Crate, tmp_path: Path) -> None
     assert len(lines) == 8 and "".join(lines[:6]) == EXPECTED_TRACE and lines[7].startswith('{"cycle":8,')
 
 
-# ---- scenarios: (name, text, the error after `FILE:` or None) ---------------------
+# ---- event files: (name, bytes, the error after `FILE:`) -------------------------
 
-CASES = [
-    ('at_huge', 'cycles 3\nat 99999999999999999999999: TOP.INIT()\n', "2:4: error: cycle 99999999999999999999999 is outside the scenario's cycles 1..3"),
-    ('at_range', 'cycles 3\nat 4: TOP.INIT()\n', "2:4: error: cycle 4 is outside the scenario's cycles 1..3"),
-    ('at_zero_input', 'cycles 3\nat 1: TOP.INIT()\nat 0: door = true\n', "3:4: error: cycle 0 is outside the scenario's cycles 1..3"),
-    ('bad_char', 'cycles 3\nat 1: gain = 1.0 $\n', '2:18: error: unexpected character `$`'),
-    ('bad_char_ctrl', 'cycles 3\n\x01\n', '2:1: error: unexpected character `\\u0001`'),
-    ('bad_char_utf8', 'cycles 3\n// é\nat 1: gain = é\n', '3:14: error: unexpected character `é`'),
-    ('bool_huge_int', 'cycles 3\nat 1: door = 999999999999999999999999999\n', '2:14: error: integer literal out of range for `i64` (`i64` holds -9223372036854775808..9223372036854775807)'),
-    ('bool_i64_int', 'cycles 3\nat 1: door = 9999999999\n', '2:14: error: mismatched types: expected `bool`, found `i64`'),
-    ('comments', '/* block\n comment */ cycles /* x */ 3 // end\nat 1: TOP.INIT() /* c */\n', None),
-    ('const_i32_for_f64', 'cycles 3\nat 1: TOP.MOVE(speed = LIMIT_K, dt = 5 ms, mode = Mode.RUN, to = HOME)\n', '2:24: error: mismatched types: expected `f64`, found `i32`'),
-    ('const_member', 'cycles 3\nat 1: gain = HOME.x\n', '2:14: error: the compiled Main Program reads only literals, constants, enum members and record constructors as scenario values; run this scenario with `rcsc sim`'),
-    ('cr', 'cycles 3\rat 1: TOP.INIT()\rat 2: NOPE.X()\r', '3:7: error: no controller named `NOPE`'),
-    ('crlf', 'cycles 3\r\nat 1: TOP.INIT()\r\nat 2: NOPE.X()\r\n', '3:7: error: no controller named `NOPE`'),
-    ('cycles0', 'cycles 0\n', '1:8: error: a scenario runs at least one cycle'),
-    ('cycles_big', 'cycles 99999999999999999999999\n', '1:8: error: `cycles 99999999999999999999999` is too large'),
-    ('cycles_twice', 'cycles 3\ncycles 4\n', '2:1: error: `cycles` is given more than once'),
-    ('dup_arg', 'cycles 3\nat 1: TOP.SET(n = 1, n = 2)\n', '2:22: error: parameter `n` given twice'),
-    ('dur_exp_huge', 'cycles 3\nat 1: TOP.MOVE(1.0, 1e99999999999 s, Mode.RUN, HOME)\n', '2:21: error: duration literal out of range for `duration` (at most 9223372036854775807 ns)'),
-    ('dur_exp_huge_neg', 'cycles 3\nat 1: TOP.MOVE(1.0, 0e-99999999999 s, Mode.RUN, HOME)\nat 2: TOP.MOVE(1.0, 5e-99999999999 s, Mode.RUN, HOME)\n', '3:21: error: duration is not a whole number of nanoseconds'),
-    ('dur_exp_neg', 'cycles 3\nat 1: TOP.MOVE(speed = 1.0, dt = 1e-10 s, mode = Mode.RUN, to = HOME)\n', '2:34: error: duration is not a whole number of nanoseconds'),
-    ('dur_for_f64', 'cycles 3\nat 1: TOP.MOVE(speed = 1 s, dt = 5 ms, mode = Mode.RUN, to = HOME)\n', '2:24: error: mismatched types: expected `f64`, found `duration`'),
-    ('dur_many_digits', 'cycles 3\nat 1: TOP.MOVE(1.0, 1.000000000000000000000000000000 s, Mode.RUN, HOME)\nat 2: TOP.MOVE(1.0, 0.000000000000000000000000001e27 ns, Mode.RUN, HOME)\n', '3:54: error: syntax error: expected `,` or `)`, found `ns`'),
-    ('dur_many_digits2', 'cycles 3\nat 1: TOP.MOVE(1.0, 12345678901234567890123 us, Mode.RUN, HOME)\n', '2:21: error: duration literal out of range for `duration` (at most 9223372036854775807 ns)'),
-    ('dur_not_whole', 'cycles 3\nat 1: TOP.MOVE(speed = 1.0, dt = 1.0000000001 ms, mode = Mode.RUN, to = HOME)\n', '2:34: error: duration is not a whole number of nanoseconds'),
-    ('dur_ok_edges', 'cycles 3\nat 1: TOP.MOVE(speed = 1.0, dt = 9223372036.854775807 s, mode = Mode.RUN, to = HOME)\nat 2: TOP.MOVE(speed = 1.0, dt = -0x10 us, mode = Mode.RUN, to = HOME)\nat 3: TOP.MOVE(speed = 2.5e-3, dt = 2.5e-3 s, mode = FAST, to = Pose(mode = Mode.HALT, y = 1_000.5, x = 1e400))\n', None),
-    ('dur_range', 'cycles 3\nat 1: TOP.MOVE(speed = 1.0, dt = 9223372037 s, mode = Mode.RUN, to = HOME)\n', '2:34: error: duration literal out of range for `duration` (at most 9223372036854775807 ns)'),
-    ('expect_keyword_in_cond', 'cycles 3\nexpect final: at\nat 1: TOP.INIT()\n', None),
-    ('expect_range', 'cycles 3\nexpect at 4: TOP.done\n', "2:1: error: cycle 4 is outside the scenario's cycles 1..3"),
-    ('expect_skip_then_at', 'cycles 3\nexpect at 2: TOP.state == MOVING and SUB.ticks > 0\nat 1: TOP.INIT()\nexpect always: gain >= -1.0\nat 2: NOPE.X()\n', '5:7: error: no controller named `NOPE`'),
-    ('expect_window', 'cycles 3\nexpect within 3..2: TOP.done\n', '2:8: error: empty window: 3 is after 2'),
-    ('expect_within_range', 'cycles 3\nexpect within 2..9: TOP.done\n', "2:1: error: cycle 9 is outside the scenario's cycles 1..3"),
-    ('expr', 'cycles 3\nat 1: gain = 1.0 + 2.0\n', '2:14: error: the compiled Main Program reads only literals, constants, enum members and record constructors as scenario values; run this scenario with `rcsc sim`'),
-    ('expr_arg', 'cycles 3\nat 1: TOP.SET(n = 1 * 2, big = 0)\n', '2:19: error: the compiled Main Program reads only literals, constants, enum members and record constructors as scenario values; run this scenario with `rcsc sim`'),
-    ('extra_pos', 'cycles 3\nat 1: TOP.SET(1, 2, 3)\n', '2:21: error: `TOP.SET` takes 2 arguments, 3 given'),
-    ("f64_huge_int", "cycles 3\nat 1: gain = " + "9" * 400 + "\n", "2:14: error: integer literal out of range for `f64` (`f64` holds integers up to about 1.8e308)"),
-    ('f64_ties', 'cycles 3\nat 1: gain = 100000000000000.125\nat 2: gain = 9007199254740993\nat 3: gain = 0.1e1\n', None),
-    ('func_call', 'cycles 3\nat 1: gain = abs(1.0)\n', '2:14: error: the compiled Main Program reads only literals, constants, enum members and record constructors as scenario values; run this scenario with `rcsc sim`'),
-    ('gm_not_env', 'cycles 3\nat 1: mode = Mode.RUN\n', '2:7: error: `mode` is written by a controller, not by the environment'),
-    ('gm_type', 'cycles 3\nat 1: door = 1\n', '2:14: error: mismatched types: expected `bool`, found `i32`'),
-    ('hex_f64', 'cycles 3\nat 1: gain = 0x1F\nat 2: gain = -0x10000000000000000000000000000000000000001\nat 3: gain = 123456789012345678901234567890\n', None),
-    ('i32_min_minus', 'cycles 3\nat 1: limit = -2147483649\n', '2:15: error: integer literal out of range for `i32` (`i32` holds -2147483648..2147483647)'),
-    ('i32_min_ok', 'cycles 3\nat 1: limit = -2147483648\n', None),
-    ('i32_range', 'cycles 3\nat 1: limit = 2147483648\n', '2:15: error: integer literal out of range for `i32` (`i32` holds -2147483648..2147483647)'),
-    ('i64_huge', 'cycles 3\nat 1: TOP.SET(n = 1, big = 999999999999999999999999999)\n', '2:28: error: integer literal out of range for `i64` (`i64` holds -9223372036854775808..9223372036854775807)'),
-    ('i64_range', 'cycles 3\nat 1: TOP.SET(n = 1, big = 9223372036854775808)\n', '2:28: error: integer literal out of range for `i64` (`i64` holds -9223372036854775808..9223372036854775807)'),
-    ('if_kw', 'cycles 3\nat 1: door = if true then false else true\n', '2:14: error: the compiled Main Program reads only literals, constants, enum members and record constructors as scenario values; run this scenario with `rcsc sim`'),
-    ('many', 'cycles 3\nat 1: TOP.INIT()\nat 1: TOP.SET(5, 6)\nat 1: door = true\nat 1: door = false\nat 3: TOP.MOVE(1.0, 1 ms, Mode.RUN, HOME)\nat 2: gain = 1e-320\n', None),
-    ('member_not_name', 'cycles 3\nat 1: gain = Mode.5\n', '2:19: error: syntax error: expected a name, found `5`'),
-    ('mismatch_dur', 'cycles 3\nat 1: TOP.MOVE(speed = 1.0, dt = 5, mode = Mode.RUN, to = HOME)\n', '2:34: error: mismatched types: expected `duration`, found `i32` (a duration needs a unit: `us`, `ms` or `s`)'),
-    ('mismatch_dur_bool', 'cycles 3\nat 1: TOP.MOVE(speed = 1.0, dt = true, mode = Mode.RUN, to = HOME)\n', '2:34: error: mismatched types: expected `duration`, found `bool`'),
-    ('mismatch_f64_for_u32', 'cycles 3\nat 1: TOP.SET(n = 1.5, big = 2)\n', '2:19: error: mismatched types: expected `u32`, found `f64`'),
-    ('missing_all', 'cycles 3\nat 2: TOP.MOVE()\n', '2:1: error: `TOP.MOVE` takes 4 arguments, 0 given (missing `speed`, `dt`, `mode`, `to`)'),
-    ('missing_arg', 'cycles 3\nat 1: TOP.SET(n = 1)\n', '2:1: error: `TOP.SET` takes 2 arguments, 1 given (missing `big`)'),
-    ('named_kw', 'cycles 3\nat 1: TOP.SET(at = 1, big = 2)\n', '2:15: error: `TOP.SET` has no parameter `at`'),
-    ('neg_bool', 'cycles 3\nat 1: door = -true\n', '2:14: error: cannot negate a value of type `bool`'),
-    ('neg_const_i32_for_f64', 'cycles 3\nat 1: TOP.MOVE(speed = -LIMIT_K, dt = 5 ms, mode = Mode.RUN, to = HOME)\n', '2:24: error: mismatched types: expected `f64`, found `i32`'),
-    ('neg_dur', 'cycles 3\nat 1: TOP.MOVE(speed = -0.0, dt = -STEP_T, mode = FAST, to = HOME)\nat 2: gain = -0\n', None),
-    ('neg_enum', 'cycles 3\nat 1: TOP.MOVE(speed = 1.0, dt = 5 ms, mode = -Mode.RUN, to = HOME)\n', '2:47: error: cannot negate a value of type `Mode`'),
-    ('neg_float_int', 'cycles 3\nat 1: limit = -2.5\n', '2:15: error: mismatched types: expected `i32`, found `f64`'),
-    ('neg_neg', 'cycles 3\nat 1: limit = - -5\nat 2: limit = - - -2147483648\nat 3: TOP.SET(n = - -3, big = -LIMIT_K)\n', '4:21: error: integer literal out of range for `u32` (`u32` holds 0..4294967295)'),
-    ('neg_neg_bad', 'cycles 3\nat 1: TOP.SET(n = - -3, big = 1)\nat 2: TOP.SET(n = - - -3, big = 1)\n', '2:21: error: integer literal out of range for `u32` (`u32` holds 0..4294967295)'),
-    ('neg_record', 'cycles 3\nat 1: TOP.MOVE(speed = 1.0, dt = 5 ms, mode = Mode.RUN, to = -HOME)\n', '2:62: error: cannot negate a value of type `Pose`'),
-    ('no_cycles', 'at 1: TOP.INIT()\n', '1:1: error: the scenario does not say how many cycles to run (add a line such as `cycles 200`)'),
-    ('no_member', 'cycles 3\nat 1: TOP.MOVE(speed = 1.0, dt = 5 ms, mode = Mode.FLY, to = HOME)\n', '2:52: error: enum `Mode` has no member `FLY`'),
-    ('not_kw', 'cycles 3\nat 1: door = not true\n', '2:14: error: the compiled Main Program reads only literals, constants, enum members and record constructors as scenario values; run this scenario with `rcsc sim`'),
-    ('not_top', 'cycles 3\nat 1: SUB.GO()\n', '2:7: error: `SUB` takes commands only from its supervisor'),
-    ('paren_ok', 'cycles 3\nat 1: gain = (-(2.5))\nat 2: limit = -(-5)\n', None),
-    ('pos_after_named', 'cycles 3\nat 1: TOP.SET(n = 1, 2)\n', '2:22: error: positional argument after a named one'),
-    ('record_field_int_ok', 'cycles 3\nat 1: TOP.MOVE(speed = 1, dt = 5 ms, mode = Mode.RUN, to = Pose(-1, 0x10, Mode.RUN))\n', None),
-    ('record_field_type', 'cycles 3\nat 1: TOP.MOVE(speed = 1.0, dt = 5 ms, mode = Mode.RUN, to = Pose(1.0, 2, Mode.RUN))\n', None),
-    ('record_field_unknown', 'cycles 3\nat 1: TOP.MOVE(speed = 1.0, dt = 5 ms, mode = Mode.RUN, to = Pose(x = 1.0, y = 2.0, z = 3.0))\n', '2:85: error: record `Pose` has no field `z`'),
-    ('record_missing', 'cycles 3\nat 1: TOP.MOVE(speed = 1.0, dt = 5 ms, mode = Mode.RUN, to = Pose(1.0))\n', '2:62: error: record `Pose` takes 3 arguments, 1 given (missing `y`, `mode`)'),
-    ('record_named_dup', 'cycles 3\nat 1: TOP.MOVE(1.0, 1 ms, Mode.RUN, Pose(x = 1.0, x = 2.0, mode = Mode.RUN))\n', '2:51: error: parameter `x` given twice'),
-    ('record_wrong_type', 'cycles 3\nat 1: gain = Pose(1.0, 2.0, Mode.RUN)\n', '2:14: error: mismatched types: expected `f64`, found `Pose`'),
-    ('string_value', 'cycles 3\nat 1: gain = "x"\n', '2:14: error: syntax error: expected a value, found `"x"`'),
-    ('syntax_args', 'cycles 3\nat 1: TOP.SET(n = 1 big = 2)\n', '2:21: error: syntax error: expected `,` or `)`, found `big`'),
-    ('syntax_colon', 'cycles 3\nat 1 TOP.INIT()\n', '2:6: error: syntax error: expected `:`, found `TOP`'),
-    ('syntax_eof', 'cycles 3\nat 1: TOP.SET(n = 1,', '2:21: error: syntax error: expected a value, found end of file'),
-    ('syntax_eq', 'cycles 3\nat 1: TOP INIT()\n', '2:11: error: syntax error: expected `.` or `=`, found `INIT`'),
-    ('syntax_expect_eof', 'cycles 3\nexpect final:', '2:14: error: syntax error: expected an expression, found end of file'),
-    ('syntax_expect_when', 'cycles 3\nexpect sometimes: true\n', '2:8: error: syntax error: expected `at`, `within`, `final` or `always`, found `sometimes`'),
-    ('syntax_input_tail', 'cycles 3\nat 1: gain = 1.0 2.0\n', '2:18: error: syntax error: expected `at`, `expect`, `cycles` or `scenario`, found `2.0`'),
-    ('syntax_item', 'cycles 3\nfoo\n', '2:1: error: syntax error: unexpected `foo` (expected `scenario`, `cycles`, `at` or `expect`)'),
-    ('syntax_paren', 'cycles 3\nat 1: TOP.INIT\n', '3:1: error: syntax error: expected `(`, found end of file'),
-    ('syntax_scenario', 'scenario name\ncycles 3\n', '1:10: error: syntax error: expected a string, found `name`'),
-    ('syntax_value', 'cycles 3\nat 1: gain = ,\n', '2:14: error: syntax error: expected a value, found `,`'),
-    ('tab_cols', 'cycles 3\n\tat\t1:\tNOPE.X()\n', '2:8: error: no controller named `NOPE`'),
-    ('trailing_comma', 'cycles 3\nat 1: TOP.SET(1, 2,)\nat 2: TOP.MOVE(1.0, 1 ms, Mode.RUN, Pose(1.0, 2.0, Mode.IDLE,),)\n', None),
-    ('u32_neg', 'cycles 3\nat 1: TOP.SET(n = -1, big = 0)\n', '2:19: error: integer literal out of range for `u32` (`u32` holds 0..4294967295)'),
-    ('u32_neg0', 'cycles 3\nat 1: TOP.SET(n = -0, big = 0)\n', None),
-    ('u32_negconst', 'cycles 3\nat 1: TOP.SET(n = -NEG_U, big = -0x7fff_ffff_ffff_ffff)\n', None),
-    ('unknown_arg', 'cycles 3\nat 1: TOP.SET(n = 1, big = 2, z = 3)\n', '2:31: error: `TOP.SET` has no parameter `z`'),
-    ('unknown_ctrl', 'cycles 3\nat 1: NOPE.INIT()\n', '2:7: error: no controller named `NOPE`'),
-    ('unknown_gm', 'cycles 3\nat 1: nope = 1\n', '2:7: error: no Global Memory variable named `nope`'),
-    ('unknown_member_base', 'cycles 3\nat 1: gain = What.x\n', '2:14: error: cannot find `What` in this scope'),
-    ('unknown_name', 'cycles 3\nat 1: gain = WHAT\n', '2:14: error: cannot find `WHAT` in this scope'),
-    ('unknown_verb', 'cycles 3\nat 1: TOP.FLY()\n', '2:11: error: `TOP` does not accept the verb `FLY`'),
-    ('unterminated_comment', 'cycles 3\n/* abc\n', '2:1: error: unterminated comment'),
-    ('unterminated_string', 'scenario "abc\ncycles 3\n', '1:10: error: unterminated string'),
-    ('wrong_enum', 'cycles 3\nat 1: TOP.MOVE(speed = 1.0, dt = 5 ms, mode = Color.RED, to = HOME)\n', '2:47: error: mismatched types: expected `Mode`, found `Color`'),
-    ('zero_dur', 'cycles 3\nat 1: TOP.MOVE(1.0, 0.000 s, Mode.RUN, HOME)\nat 2: TOP.MOVE(1.0, 0x0 ms, Mode.RUN, HOME)\nat 3: TOP.MOVE(1.0, 00012.50000e-1 us, Mode.RUN, HOME)\n', None),
-]
+CASES = event_errors()
 
 
-@pytest.mark.parametrize("name,text,expected", CASES, ids=[c[0] for c in CASES])
-def test_scenario_reader(crate: Crate, tmp_path: Path, name: str, text: str, expected: str | None) -> None:
-    scn = tmp_path / f"{name}.scn"
-    scn.write_bytes(text.encode("utf-8"))
+@pytest.mark.parametrize("name,data,expected", CASES, ids=[c[0] for c in CASES])
+def test_event_file_errors(crate: Crate, tmp_path: Path, name: str, data: bytes, expected: str) -> None:
+    scn = tmp_path / f"{name}.events"
+    scn.write_bytes(data)
     proc = run_scenario(crate.debug, scn)
-    if expected is None:
-        assert proc.returncode == 0, proc.stderr
-        assert proc.stderr == ""
-        assert len(proc.stdout.splitlines()) == 3
-    else:
-        assert proc.returncode == 2
-        assert proc.stdout == ""
-        assert proc.stderr == f"{scn}:{expected}\n"
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    assert proc.stderr == f"{scn}:{expected}\n"
+
+
+def test_every_truncation_is_refused(crate: Crate, tmp_path: Path) -> None:
+    """Each proper prefix of a good event file: exit 2 with one error line, never a panic."""
+    data = events(SCENARIO).encode("utf-8")
+    scn = tmp_path / "cut.events"
+    for n in range(len(data)):
+        scn.write_bytes(data[:n])
+        proc = run_scenario(crate.debug, scn)
+        assert (proc.returncode, proc.stdout, proc.stderr.count("\n")) == (2, "", 1), (n, proc.stderr)
+        assert "panicked" not in proc.stderr
+
+
+def test_corrupted_event_files_never_panic(crate: Crate, tmp_path: Path) -> None:
+    """Seeded mutations of a good event file: a run or one error line, never a panic."""
+    scn = tmp_path / "bad.events"
+    for k, bad in enumerate(mutations(events(SCENARIO).encode("utf-8"), 150)):
+        scn.write_bytes(bad)
+        proc = run_scenario(crate.debug, scn)
+        assert (proc.returncode, proc.stderr.count("\n")) in ((0, 0), (2, 1)), (k, bad, proc.stderr)
+        assert "panicked" not in proc.stderr
 
 
 def test_unreadable_scenario(crate: Crate, tmp_path: Path) -> None:
-    proc = run(crate.debug, *RUN, "--scenario", str(tmp_path / "none.scn"))
+    proc = run(crate.debug, *RUN, "--scenario", str(tmp_path / "none.events"))
     assert proc.returncode == 2
-    assert proc.stderr == f"{tmp_path / 'none.scn'}: error: cannot read the scenario: No such file or directory\n"
+    assert proc.stderr == f"{tmp_path / 'none.events'}: error: cannot read the event file: No such file or directory\n"
 
 
 @pytest.mark.parametrize("profile", ["debug", "release"])
@@ -294,12 +210,13 @@ def test_same_bytes_as_the_c_main_program(crate: Crate, c_fixture: Path, tmp_pat
     rust = getattr(crate, profile)
     runs: list[list[str]] = [["--help"], ["-h", "--fast"], ["--bogus"], ["--cycles"], ["--cycles", "0"], ["--cycles=x1"], ["--fast=1"],
                              ["--help", "--bogus"], [*RUN, "--cycles=4", "--trace=-"], [*RUN, "--trace", str(tmp_path / "no/such/dir.jsonl")]]
-    scn = tmp_path / "run.scn"
-    scn.write_text(SCENARIO, encoding="utf-8")
-    runs.append([*RUN, "--scenario", str(scn), "--trace", "-"])
-    for name, text, _ in CASES:
-        p = tmp_path / f"{name}.scn"
-        p.write_bytes(text.encode("utf-8"))
+    for name, text in (("run", SCENARIO), ("computed", COMPUTED)):
+        scn = tmp_path / f"{name}.events"
+        scn.write_text(events(text), encoding="utf-8")
+        runs.append([*RUN, "--scenario", str(scn), "--trace", "-"])
+    for name, data, _ in CASES:
+        p = tmp_path / f"{name}.events"
+        p.write_bytes(data)
         runs.append([*RUN, "--scenario", str(p), "--trace", "-"])
     for args in runs:
         c = run(c_fixture, *args)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from rcsc.semantics import model as m
 from rcsc.outputs.backend import cpu_gm, cpu_ticks, keeps_gm_stamps, ordered_types
+from rcsc.outputs.events import interface_hash
 from rcsc.semantics.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type
 
 from rcsc.backends.c.target import CTarget, c_string
@@ -125,6 +126,7 @@ def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: li
         })
     gm_stamps = [f"offsetof({tg.n.fixed('buffers')}, gm_stamp.{tg.ident(n)})," for n in d.gm] if keeps_gm_stamps(d) else []
     return {
+        "events_hash": c_string(interface_hash(d, ctrls)),
         "multi": multi_tables(tg, cpu, ctrls) if len(d.cpus) > 1 else None,
         "gm_stamps": gm_stamps,
         "period": tg.period_macro(cpu.name),

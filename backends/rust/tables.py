@@ -13,6 +13,7 @@ import re
 
 from rcsc.semantics import model as m
 from rcsc.outputs.backend import cpu_gm, cpu_ticks, keeps_gm_stamps, ordered_types
+from rcsc.outputs.events import interface_hash
 from rcsc.backends.rust.fmt import Array, Atom, Call, Cast, Node, Struct, Unary, arm, assign, field_decl, fn_head, let, pad, tail
 from rcsc.backends.rust.target import RustTarget, rust_string
 from rcsc.semantics.types import BOOL, DURATION, I32, U32, EnumType, FloatType, IntType, RecordType, Type
@@ -149,6 +150,7 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
         ("gm", Atom("&GM", 11)), ("consts", Atom("&CONSTS", 11)), ("types", Atom("&TYPES", 11)), ("ctrls", Atom("&CTRLS", 11)),
         ("schedule", Unary("&", Array([Atom(str(index[c.name])) for c in schedule]))),
         ("multi", Atom("Some(&MULTI)" if len(d.cpus) > 1 else "None")),
+        ("events_hash", _s(interface_hash(d, ctrls))),
     ])
     if len(d.cpus) > 1:
         statics += _multi_statics(tg, cpu, ctrls)

@@ -122,7 +122,9 @@ def failure_text(result: RunResult) -> str:
     return "\n".join(lines)
 
 
-def run_one(design_path: str, scenario_path: str, design_cache: dict) -> Outcome:
+def run_one(design_path: str, scenario_path: str, design_cache: dict, target: str = "sim", build_root: str = "build/rcsc-test") -> Outcome:
+    """One scenario in the simulator (`target` "sim") or on the design's
+    compiled Main Program (`target` "c" or "rust", built under `build_root`)."""
     start = time.perf_counter()
     if design_path not in design_cache:
         try:
@@ -142,7 +144,24 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict) -> Outcome
     sc = text_to_scenario(SourceFile(scenario_path, text), checked.model, diags)
     if sc is None:
         return Outcome(design_path, scenario_path, False, 0.0, message="the scenario has errors", diags=diags)
-    result = run_scenario(checked.model, sc)
+    if target == "sim":
+        result = run_scenario(checked.model, sc)
+    else:
+        from pathlib import Path
+
+        from rcsc.sim import compiled
+
+        key = (design_path, target)
+        try:
+            if key not in design_cache:
+                design_cache[key] = compiled.build(checked.model, target, build_root)
+            built = design_cache[key]
+            if isinstance(built, compiled.CompiledError):
+                raise built
+            result = compiled.run_compiled(checked.model, sc, built, built.folder / "runs")
+        except compiled.CompiledError as exc:
+            design_cache.setdefault(key, exc)
+            return Outcome(design_path, scenario_path, False, time.perf_counter() - start, message=f"{target}: {exc}")
     seconds = time.perf_counter() - start
     return Outcome(design_path, scenario_path, result.passed, seconds, sc.cycles, "" if result.passed else failure_text(result), result=result)
 

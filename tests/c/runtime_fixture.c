@@ -204,6 +204,7 @@ static const size_t schedule[] = {1, 0};
 
 static const rcs_design design = {
     "fixture", "MAIN", 1000000, &gm, gm_fields, gm_from_env, 5, consts, 6, types, 3, ctrls, 2, schedule, 2, NULL, NULL, NULL, NULL, NULL,
+    "fb17482bafd2da03", /* the interface hash of tests/event_cases.py FIXTURE_RCS */
 };
 
 int main(int argc, char **argv) {

@@ -5,11 +5,8 @@
  * Hosted, POSIX (C99 + POSIX.1-2008).  See rcs_runtime.h for the design
  * tables.  Parts:
  *   - builtin type descriptors;
- *   - the scenario reader: a tokenizer and parser for the .scn format
- *     (grammar/scenario.lark) that accepts, as values, the constant subset a
- *     compiled program can evaluate without the compiler (literals,
- *     constants, enum members, record constructors, unary minus) and checks
- *     them the way `rcsc sim` does (rcsc/front/scenario.py, rcsc/semantics/typecheck.py);
+ *   - the event reader: a resolved event file (docs/events.md) that
+ *     `rcsc events` compiles from a scenario (numbers and ids only);
  *   - the canonical JSON-lines trace (rcsc/sim/trace.py, jsonl_line);
  *   - rcs_main: options, the heartbeat on absolute deadlines, real-time
  *     mode, the console (pause, single step, quit) and the timing table.
@@ -107,73 +104,17 @@ static void copy_typed(const rcs_type *t, unsigned char *dst, const unsigned cha
     }
 }
 
-static int type_eq(const rcs_type *a, const rcs_type *b) {
-    if (a == b) return 1;
-    if (a->kind != b->kind) return 0;
-    if (a->kind == RCS_T_ENUM || a->kind == RCS_T_RECORD) return strcmp(a->name, b->name) == 0;
-    return 1;
-}
-
-static int is_numeric(rcs_kind k) {
-    return k == RCS_T_I32 || k == RCS_T_I64 || k == RCS_T_U32 || k == RCS_T_F64 || k == RCS_T_DURATION;
-}
-
-/* ==== the scenario reader ================================================= */
-
-typedef enum { TK_EOF, TK_NAME, TK_INT, TK_FLOAT, TK_STRING, TK_PUNCT } tk_kind;
-
-typedef struct {
-    tk_kind kind;
-    size_t start, len; /* bytes in the text */
-    size_t line, col;  /* 1-based; the column counts characters */
-} token;
-
-typedef enum { V_INT, V_FLOAT, V_DUR, V_BOOL, V_NAME, V_MEMBER, V_CALL, V_NEG } vkind;
-
-typedef struct vnode vnode;
-
-typedef struct {
-    int named;
-    size_t name_tok; /* named: the name */
-    size_t tok;      /* first token of the argument */
-    vnode *value;
-} varg;
-
-struct vnode {
-    vkind kind;
-    size_t tok;    /* first token */
-    size_t tok2;   /* V_MEMBER: the member's name */
-    uint64_t mag;  /* V_INT: the literal's value */
-    int ovf;       /* V_INT: above 2^64-1; V_DUR: above the i64 range */
-    int64_t ns;    /* V_DUR */
-    bool b;        /* V_BOOL */
-    vnode *sub;    /* V_NEG */
-    varg *args;    /* V_CALL */
-    size_t n_args;
-};
-
-typedef enum { I_NAME, I_CYCLES, I_COMMAND, I_INPUT, I_EXPECT, I_STOP, I_FREEZE } ikind;
-typedef enum { W_AT, W_WITHIN, W_FINAL, W_ALWAYS } wkind;
-
-typedef struct {
-    ikind kind;
-    size_t tok;     /* the item's first token */
-    size_t num_tok; /* `cycles N`, `at N:` */
-    uint64_t num;
-    int num_ovf;
-    size_t name_tok, name2_tok; /* CTRL . VERB, or the variable */
-    varg *args;
-    size_t n_args;
-    vnode *value;
-    wkind when;
-    size_t when_tok, lo_tok, hi_tok;
-    uint64_t lo, hi;
-    int lo_ovf, hi_ovf;
-} item;
+/* ==== the event reader ====================================================
+ *
+ * Reads a resolved event file (docs/events.md), the only scenario form the
+ * Main Program takes: `rcsc events DESIGN SCENARIO -o FILE` has parsed,
+ * checked and evaluated the scenario, so this reader sees numbers and ids
+ * only.  Every number is checked against the design's tables; the first
+ * problem ends the reading with `FILE:LINE: error: ...`.
+ */
 
 typedef struct {
     uint64_t cycle;
-    size_t seq;    /* file order */
     size_t target; /* Global Memory index, or controller index */
     size_t verb;   /* command: index into the controller's verbs */
     unsigned char *blob;
@@ -189,1029 +130,160 @@ struct rcs_scenario {
     size_t n_commands, cap_commands;
 };
 
+#define EV_MAX_WORDS 4096u
+
 typedef struct {
     const char *path;
     FILE *err;
     const rcs_design *d;
-    char *text;
-    size_t text_len;
-    token *toks;
-    size_t n_toks, cap_toks;
-    size_t pos;
-    int failed;
-    void **allocs; /* everything below is freed with the parser */
-    size_t n_allocs, cap_allocs;
-    item *items;
-    size_t n_items, cap_items;
-    char found_buf[160];
-} parser;
+    size_t line;
+    char *w[EV_MAX_WORDS];
+    size_t n;
+} ev_reader;
 
-static const char UNSUPPORTED[] =
-    "the compiled Main Program reads only literals, constants, enum members and record constructors as scenario "
-    "values; run this scenario with `rcsc sim`";
-
-static void *p_alloc(parser *p, size_t size) {
-    grow((void **)&p->allocs, &p->cap_allocs, p->n_allocs, sizeof *p->allocs);
-    void *m = xcalloc(1, size);
-    p->allocs[p->n_allocs++] = m;
-    return m;
-}
-
-static void vp_error_at(parser *p, size_t line, size_t col, const char *fmt, va_list ap) {
-    if (p->failed) return; /* the first error only */
-    p->failed = 1;
-    fprintf(p->err, "%s:%zu:%zu: error: ", p->path, line, col);
-    vfprintf(p->err, fmt, ap);
-    fputc('\n', p->err);
-}
-
-static void p_error_at(parser *p, size_t line, size_t col, const char *fmt, ...) RCS_PRINTF(4, 5);
-static void p_error_at(parser *p, size_t line, size_t col, const char *fmt, ...) {
+static int ev_error(ev_reader *r, const char *fmt, ...) RCS_PRINTF(2, 3);
+static int ev_error(ev_reader *r, const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
-    vp_error_at(p, line, col, fmt, ap);
+    fprintf(r->err, "%s:%zu: error: ", r->path, r->line);
+    vfprintf(r->err, fmt, ap);
+    fputc('\n', r->err);
     va_end(ap);
+    return 0;
 }
 
-static const token *tk(const parser *p, size_t i) { return &p->toks[i < p->n_toks ? i : p->n_toks - 1]; }
-
-static void p_error(parser *p, size_t tok, const char *fmt, ...) RCS_PRINTF(3, 4);
-static void p_error(parser *p, size_t tok, const char *fmt, ...) {
-    const token *t = tk(p, tok);
-    va_list ap;
-    va_start(ap, fmt);
-    vp_error_at(p, t->line, t->col, fmt, ap);
-    va_end(ap);
-}
-
-/* For "%.*s": a token's length (as int) and text. */
-#define TXT(p, i) (int)tk(p, i)->len, (p)->text + tk(p, i)->start
-
-/* "`TOKEN`" or "end of file", for syntax errors. */
-static const char *found(parser *p, size_t i) {
-    const token *t = tk(p, i);
-    if (t->kind == TK_EOF) return "end of file";
-    int len = t->len > 100 ? 100 : (int)t->len;
-    snprintf(p->found_buf, sizeof p->found_buf, "`%.*s`", len, p->text + t->start);
-    return p->found_buf;
-}
-
-/* ---- tokens ---- */
-
-static int is_digit(char c) { return c >= '0' && c <= '9'; }
-static int is_xdigit(char c) { return is_digit(c) || (c >= 'a' && c <= 'f') || (c >= 'A' && c <= 'F'); }
-static int is_alpha_(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_'; }
-
-/* Moves line/col over text[from, to): columns count characters (UTF-8
- * continuation bytes do not count); \r\n and a lone \r end a line, as
- * Python's universal newlines read them. */
-static void advance(const char *s, size_t len, size_t from, size_t to, size_t *line, size_t *col) {
-    for (size_t i = from; i < to; i++) {
-        unsigned char c = (unsigned char)s[i];
-        if (c == '\n') {
-            (*line)++;
-            *col = 1;
-        } else if (c == '\r') {
-            if (i + 1 < len && s[i + 1] == '\n') continue;
-            (*line)++;
-            *col = 1;
-        } else if ((c & 0xC0) != 0x80) {
-            (*col)++;
-        }
-    }
-}
-
-static void push_token(parser *p, tk_kind kind, size_t start, size_t len, size_t line, size_t col) {
-    grow((void **)&p->toks, &p->cap_toks, p->n_toks, sizeof *p->toks);
-    token *t = &p->toks[p->n_toks++];
-    t->kind = kind;
-    t->start = start;
-    t->len = len;
-    t->line = line;
-    t->col = col;
-}
-
-static size_t exponent_end(const char *s, size_t n, size_t j) {
-    if (j < n && (s[j] == 'e' || s[j] == 'E')) {
-        size_t k = j + 1;
-        if (k < n && (s[k] == '+' || s[k] == '-')) k++;
-        if (k < n && is_digit(s[k])) {
-            while (k < n && is_digit(s[k])) k++;
-            return k;
-        }
-    }
-    return j;
-}
-
-static int lex(parser *p) {
-    const char *s = p->text;
-    size_t n = p->text_len, i = 0, line = 1, col = 1;
-    for (;;) {
-        size_t j = i;
-        for (;;) { /* whitespace and comments */
-            if (j < n && (s[j] == ' ' || s[j] == '\t' || s[j] == '\n' || s[j] == '\r' || s[j] == '\f')) {
-                j++;
-            } else if (j + 1 < n && s[j] == '/' && s[j + 1] == '/') {
-                while (j < n && s[j] != '\n' && s[j] != '\r') j++;
-            } else if (j + 1 < n && s[j] == '/' && s[j + 1] == '*') {
-                size_t k = j + 2;
-                while (k + 1 < n && !(s[k] == '*' && s[k + 1] == '/')) k++;
-                if (k + 1 >= n) {
-                    advance(s, n, i, j, &line, &col);
-                    p_error_at(p, line, col, "unterminated comment");
-                    return 0;
-                }
-                j = k + 2;
-            } else {
-                break;
-            }
-        }
-        advance(s, n, i, j, &line, &col);
-        i = j;
-        if (i >= n) {
-            push_token(p, TK_EOF, n, 0, line, col);
-            return 1;
-        }
-        char c = s[i];
-        tk_kind kind;
-        if (is_alpha_(c)) {
-            while (j < n && (is_alpha_(s[j]) || is_digit(s[j]))) j++;
-            kind = TK_NAME;
-        } else if (is_digit(c)) {
-            kind = TK_INT;
-            if (c == '0' && i + 2 < n && s[i + 1] == 'x' && is_xdigit(s[i + 2])) {
-                j = i + 2;
-                while (j < n && (is_xdigit(s[j]) || s[j] == '_')) j++;
-            } else {
-                while (j < n && (is_digit(s[j]) || s[j] == '_')) j++;
-                if (j + 1 < n && s[j] == '.' && is_digit(s[j + 1])) {
-                    j++;
-                    while (j < n && (is_digit(s[j]) || s[j] == '_')) j++;
-                    j = exponent_end(s, n, j);
-                    kind = TK_FLOAT;
-                } else {
-                    size_t k = exponent_end(s, n, j);
-                    if (k != j) {
-                        j = k;
-                        kind = TK_FLOAT;
-                    }
-                }
-            }
-        } else if (c == '"') {
-            j = i + 1;
-            while (j < n && s[j] != '"' && s[j] != '\n' && s[j] != '\r') j++;
-            if (j >= n || s[j] != '"') {
-                p_error_at(p, line, col, "unterminated string");
-                return 0;
-            }
-            j++;
-            kind = TK_STRING;
-        } else {
-            static const char *const two[] = {"..", "==", "!=", "<=", ">="};
-            kind = TK_PUNCT;
-            j = i;
-            for (size_t k = 0; k < sizeof two / sizeof two[0]; k++)
-                if (i + 1 < n && s[i] == two[k][0] && s[i + 1] == two[k][1]) j = i + 2;
-            if (j == i) {
-                if (c != '\0' && strchr(":.(),=-+*/%<>", c) != NULL) {
-                    j = i + 1;
-                } else {
-                    unsigned char u = (unsigned char)c;
-                    if (u >= 0x80) {
-                        size_t k = i + 1;
-                        while (k < n && ((unsigned char)s[k] & 0xC0) == 0x80) k++;
-                        p_error_at(p, line, col, "unexpected character `%.*s`", (int)(k - i), s + i);
-                    } else if (u < 0x20 || u == 0x7F) {
-                        p_error_at(p, line, col, "unexpected character `\\u%04x`", (unsigned)u);
-                    } else {
-                        p_error_at(p, line, col, "unexpected character `%c`", c);
-                    }
-                    return 0;
-                }
-            }
-        }
-        push_token(p, kind, i, j - i, line, col);
-        advance(s, n, i, j, &line, &col);
-        i = j;
-    }
-}
-
-static int is_punct(const parser *p, size_t i, const char *s) {
-    const token *t = tk(p, i);
-    return t->kind == TK_PUNCT && t->len == strlen(s) && memcmp(p->text + t->start, s, t->len) == 0;
-}
-
-/* Whether token i is the name `s`. */
-static int tok_is(const parser *p, size_t i, const char *s) {
-    const token *t = tk(p, i);
-    return t->kind == TK_NAME && t->len == strlen(s) && memcmp(p->text + t->start, s, t->len) == 0;
-}
-
-/* Whether token i spells the table name `s`. */
-static int tok_names(const parser *p, size_t i, const char *s) {
-    const token *t = tk(p, i);
-    return s != NULL && t->len == strlen(s) && memcmp(p->text + t->start, s, t->len) == 0;
-}
-
-/* ---- numbers ---- */
-
-/* The token's text without `_`, with an optional leading minus. */
-static char *clean_number(parser *p, size_t i, int neg) {
-    const token *t = tk(p, i);
-    char *buf = p_alloc(p, t->len + 2);
-    size_t k = 0;
-    if (neg) buf[k++] = '-';
-    for (size_t j = 0; j < t->len; j++)
-        if (p->text[t->start + j] != '_') buf[k++] = p->text[t->start + j];
-    buf[k] = '\0';
-    return buf;
-}
-
-/* An INT token's value; *ovf when it is above 2^64-1. */
-static uint64_t int_token(const parser *p, size_t i, int *ovf) {
-    const token *t = tk(p, i);
-    const char *s = p->text + t->start;
+/* A whole number in base 10 (at most 2^64-1) or 16 (at most 16 digits). */
+static int ev_number(ev_reader *r, size_t i, int base, uint64_t *out) {
+    if (i >= r->n) return ev_error(r, "the line ends early: %zu numbers, expected more", r->n - 1);
+    const char *s = r->w[i];
     uint64_t v = 0;
-    *ovf = 0;
-    int hex = t->len > 2 && s[0] == '0' && s[1] == 'x';
-    for (size_t j = hex ? 2 : 0; j < t->len; j++) {
-        char c = s[j];
-        if (c == '_') continue;
-        uint64_t dgt = is_digit(c) ? (uint64_t)(c - '0') : (uint64_t)((c | 0x20) - 'a' + 10);
-        uint64_t base = hex ? 16u : 10u;
-        if (v > (UINT64_MAX - dgt) / base) *ovf = 1;
-        v = v * base + dgt;
+    size_t k = 0;
+    for (; s[k]; k++) {
+        char c = s[k];
+        unsigned dig = c >= '0' && c <= '9' ? (unsigned)(c - '0')
+                     : base == 16 && c >= 'a' && c <= 'f' ? (unsigned)(c - 'a' + 10)
+                     : base == 16 && c >= 'A' && c <= 'F' ? (unsigned)(c - 'A' + 10) : 99u;
+        if (dig == 99u || (base == 10 && v > (UINT64_MAX - dig) / 10u) || (base == 16 && k >= 16))
+            return ev_error(r, "`%.40s` is not a %s number", s, base == 10 ? "decimal" : "hexadecimal");
+        v = v * (uint64_t)base + dig;
     }
-    return v;
+    if (k == 0) return ev_error(r, "an empty number");
+    *out = v;
+    return 1;
 }
 
-/* Nanoseconds of the number token i times 10^unit_exp, exactly (as a decimal
- * rational, like Python's Fraction).  Returns 0, 1 (not a whole number of
- * nanoseconds) or 2 (above the i64 range). */
-static int duration_ns(const parser *p, size_t i, int unit_exp, int64_t *out) {
-    const token *t = tk(p, i);
-    const char *s = p->text + t->start;
+static int ev_index(ev_reader *r, size_t i, size_t n, const char *what, size_t *out) {
     uint64_t v;
-    long e = unit_exp;
-    *out = 0;
-    if (t->kind == TK_INT && t->len > 2 && s[0] == '0' && s[1] == 'x') {
-        int ovf;
-        v = int_token(p, i, &ovf);
-        if (ovf) return 2;
-    } else {
-        /* The mantissa's significant digits as an integer D and an exponent:
-         * the value is D * 10^e.  A whole number of nanoseconds that fits in
-         * an i64 has at most 19 significant digits once trailing zeros are
-         * moved into the exponent. */
-        char digits[20];
-        size_t nd = 0, j = 0, zeros = 0; /* significant digits; trailing zeros among them */
-        long frac = 0;
-        int in_frac = 0;
-        for (; j < t->len && s[j] != 'e' && s[j] != 'E'; j++) {
-            char c = s[j];
-            if (c == '_') continue;
-            if (c == '.') {
-                in_frac = 1;
-                continue;
-            }
-            if (in_frac) frac++;
-            if (nd == 0 && c == '0') continue; /* leading zeros */
-            if (nd < sizeof digits) digits[nd] = c;
-            nd++;
-            zeros = c == '0' ? zeros + 1 : 0;
-        }
-        long ex = 0;
-        if (j < t->len) { /* exponent */
-            j++;
-            int eneg = 0;
-            if (s[j] == '+' || s[j] == '-') eneg = s[j++] == '-';
-            for (; j < t->len; j++)
-                if (ex < 100000) ex = ex * 10 + (s[j] - '0');
-            if (eneg) ex = -ex;
-        }
-        if (nd == 0) return 0; /* zero */
-        nd -= zeros;
-        e += ex - frac + (long)zeros;
-        if (e < 0) return 1;
-        if (nd > 19) return 2;
-        v = 0;
-        for (size_t k = 0; k < nd; k++) v = v * 10u + (uint64_t)(digits[k] - '0');
-    }
-    for (long k = 0; k < e; k++) {
-        if (v == 0) break;
-        if (v > (uint64_t)INT64_MAX / 10u) return 2;
-        v *= 10u;
-    }
-    if (v > (uint64_t)INT64_MAX) return 2;
-    *out = (int64_t)v;
-    return 0;
-}
-
-/* ---- parsing ---- */
-
-enum { CTX_ARG, CTX_PAREN, CTX_INPUT };
-
-static int want(parser *p, const char *punct) {
-    if (is_punct(p, p->pos, punct)) {
-        p->pos++;
-        return 1;
-    }
-    p_error(p, p->pos, "syntax error: expected `%s`, found %s", punct, found(p, p->pos));
-    return 0;
-}
-
-static int want_kind(parser *p, tk_kind kind, const char *what) {
-    if (tk(p, p->pos)->kind == kind) {
-        p->pos++;
-        return 1;
-    }
-    p_error(p, p->pos, "syntax error: expected %s, found %s", what, found(p, p->pos));
-    return 0;
-}
-
-/* A keyword that begins an item (where a new item may begin). */
-static int item_keyword(const parser *p, size_t i) {
-    return tok_is(p, i, "scenario") || tok_is(p, i, "cycles") || tok_is(p, i, "at") || tok_is(p, i, "expect");
-}
-
-/* Whether token i continues an expression (an operator, `.`, a call). */
-static int continues_expr(const parser *p, size_t i) {
-    static const char *const ops[] = {".", "(", "+", "-", "*", "/", "%", "==", "!=", "<", "<=", ">", ">="};
-    for (size_t k = 0; k < sizeof ops / sizeof ops[0]; k++)
-        if (is_punct(p, i, ops[k])) return 1;
-    return tok_is(p, i, "and") || tok_is(p, i, "or") || tok_is(p, i, "then") || tok_is(p, i, "else");
-}
-
-static vnode *parse_value(parser *p, int ctx);
-
-static vnode *new_node(parser *p, vkind kind, size_t tok) {
-    vnode *v = p_alloc(p, sizeof *v);
-    v->kind = kind;
-    v->tok = tok;
-    return v;
-}
-
-/* `( [arg {, arg} [,]] )`, the `(` being the current token. */
-static int parse_args(parser *p, varg **out, size_t *n_out) {
-    size_t cap = 0, n = 0;
-    varg *args = NULL;
-    if (!want(p, "(")) return 0;
-    while (!is_punct(p, p->pos, ")")) {
-        varg a;
-        memset(&a, 0, sizeof a);
-        a.tok = p->pos;
-        if (tk(p, p->pos)->kind == TK_NAME && is_punct(p, p->pos + 1, "=")) {
-            a.named = 1;
-            a.name_tok = p->pos;
-            p->pos += 2;
-        }
-        a.value = parse_value(p, CTX_ARG);
-        if (a.value == NULL) {
-            free(args);
-            return 0;
-        }
-        grow((void **)&args, &cap, n, sizeof *args);
-        args[n++] = a;
-        if (is_punct(p, p->pos, ",")) p->pos++;
-    }
-    p->pos++; /* `)` */
-    *out = p_alloc(p, n * sizeof *args);
-    if (n) memcpy(*out, args, n * sizeof *args);
-    *n_out = n;
-    free(args);
+    if (!ev_number(r, i, 10, &v)) return 0;
+    if (v >= n) return ev_error(r, "%s %" PRIu64 " is out of range (the design has %zu)", what, v, n);
+    *out = (size_t)v;
     return 1;
 }
 
-static vnode *parse_primary(parser *p) {
-    size_t i = p->pos;
-    const token *t = tk(p, i);
-    if (t->kind == TK_INT || t->kind == TK_FLOAT) {
-        p->pos++;
-        int unit = tok_is(p, p->pos, "us") ? 3 : tok_is(p, p->pos, "ms") ? 6 : tok_is(p, p->pos, "s") ? 9 : 0;
-        if (unit) {
-            p->pos++;
-            vnode *v = new_node(p, V_DUR, i);
-            int r = duration_ns(p, i, unit, &v->ns);
-            if (r == 1) {
-                p_error(p, i, "duration is not a whole number of nanoseconds");
-                return NULL;
-            }
-            v->ovf = r == 2;
-            return v;
-        }
-        if (t->kind == TK_FLOAT) return new_node(p, V_FLOAT, i);
-        vnode *v = new_node(p, V_INT, i);
-        v->mag = int_token(p, i, &v->ovf);
-        return v;
-    }
-    if (t->kind == TK_NAME) {
-        if (tok_is(p, i, "true") || tok_is(p, i, "false")) {
-            vnode *v = new_node(p, V_BOOL, i);
-            v->b = tok_is(p, i, "true");
-            p->pos++;
-            return v;
-        }
-        if (tok_is(p, i, "not") || tok_is(p, i, "if")) {
-            p_error(p, i, "%s", UNSUPPORTED);
-            return NULL;
-        }
-        p->pos++;
-        if (is_punct(p, p->pos, ".")) {
-            p->pos++;
-            vnode *v = new_node(p, V_MEMBER, i);
-            v->tok2 = p->pos;
-            if (!want_kind(p, TK_NAME, "a name")) return NULL;
-            return v;
-        }
-        if (is_punct(p, p->pos, "(")) {
-            vnode *v = new_node(p, V_CALL, i);
-            if (!parse_args(p, &v->args, &v->n_args)) return NULL;
-            return v;
-        }
-        return new_node(p, V_NAME, i);
-    }
-    if (is_punct(p, i, "(")) {
-        p->pos++;
-        vnode *v = parse_value(p, CTX_PAREN);
-        if (v == NULL || !want(p, ")")) return NULL;
-        return v;
-    }
-    p_error(p, i, "syntax error: expected a value, found %s", found(p, i));
-    return NULL;
+static size_t count_leaves(const rcs_type *t) {
+    if (t->kind != RCS_T_RECORD) return 1;
+    size_t n = 0;
+    for (size_t i = 0; i < t->n_fields; i++) n += count_leaves(t->fields[i].type);
+    return n;
 }
 
-static vnode *parse_unary(parser *p) {
-    if (is_punct(p, p->pos, "-")) {
-        vnode *v = new_node(p, V_NEG, p->pos);
-        p->pos++;
-        v->sub = parse_unary(p);
-        return v->sub ? v : NULL;
-    }
-    return parse_primary(p);
-}
-
-/* A value, then what must follow it in `ctx`: anything that would continue
- * an expression is outside what the compiled program reads. */
-static vnode *parse_value(parser *p, int ctx) {
-    size_t start = p->pos;
-    vnode *v = parse_unary(p);
-    if (v == NULL) return NULL;
-    size_t i = p->pos;
-    int ok = ctx == CTX_ARG     ? is_punct(p, i, ",") || is_punct(p, i, ")")
-             : ctx == CTX_PAREN ? is_punct(p, i, ")")
-                                : tk(p, i)->kind == TK_EOF || item_keyword(p, i);
-    if (ok) return v;
-    if (continues_expr(p, i)) {
-        p_error(p, start, "%s", UNSUPPORTED);
-        return NULL;
-    }
-    p_error(p, i, "syntax error: expected %s, found %s",
-            ctx == CTX_ARG ? "`,` or `)`" : ctx == CTX_PAREN ? "`)`" : "`at`, `expect`, `cycles` or `scenario`",
-            found(p, i));
-    return NULL;
-}
-
-static int can_end_expr(const parser *p, size_t i) {
-    tk_kind k = tk(p, i)->kind;
-    return k == TK_NAME || k == TK_INT || k == TK_FLOAT || is_punct(p, i, ")");
-}
-
-static int parse_item(parser *p, item *it) {
-    memset(it, 0, sizeof *it);
-    it->tok = p->pos;
-    if (tok_is(p, p->pos, "scenario")) {
-        it->kind = I_NAME;
-        p->pos++;
-        return want_kind(p, TK_STRING, "a string");
-    }
-    if (tok_is(p, p->pos, "cycles")) {
-        it->kind = I_CYCLES;
-        p->pos++;
-        it->num_tok = p->pos;
-        if (!want_kind(p, TK_INT, "an integer")) return 0;
-        it->num = int_token(p, it->num_tok, &it->num_ovf);
+/* Stores the leaves w[*k], w[*k + 1], ... of a value of type t at dst. */
+static int ev_value(ev_reader *r, const rcs_type *t, unsigned char *dst, size_t *k) {
+    if (t->kind == RCS_T_RECORD) {
+        for (size_t i = 0; i < t->n_fields; i++)
+            if (!ev_value(r, t->fields[i].type, dst + t->fields[i].offset, k)) return 0;
         return 1;
     }
-    if (tok_is(p, p->pos, "at")) {
-        p->pos++;
-        it->num_tok = p->pos;
-        if (!want_kind(p, TK_INT, "an integer")) return 0;
-        it->num = int_token(p, it->num_tok, &it->num_ovf);
-        if (!want(p, ":")) return 0;
-        it->name_tok = p->pos;
-        if (!want_kind(p, TK_NAME, "a name")) return 0;
-        /* `stop` and `freeze` are keywords here: fault injection. */
-        if ((tok_is(p, it->name_tok, "stop") || tok_is(p, it->name_tok, "freeze")) && tk(p, p->pos)->kind == TK_NAME) {
-            it->kind = tok_is(p, it->name_tok, "stop") ? I_STOP : I_FREEZE;
-            it->name_tok = p->pos++;
-            return 1;
-        }
-        if (is_punct(p, p->pos, ".")) {
-            it->kind = I_COMMAND;
-            p->pos++;
-            it->name2_tok = p->pos;
-            if (!want_kind(p, TK_NAME, "a name")) return 0;
-            return parse_args(p, &it->args, &it->n_args);
-        }
-        if (is_punct(p, p->pos, "=")) {
-            it->kind = I_INPUT;
-            p->pos++;
-            it->value = parse_value(p, CTX_INPUT);
-            return it->value != NULL;
-        }
-        p_error(p, p->pos, "syntax error: expected `.` or `=`, found %s", found(p, p->pos));
-        return 0;
-    }
-    if (tok_is(p, p->pos, "expect")) {
-        it->kind = I_EXPECT;
-        p->pos++;
-        it->when_tok = p->pos;
-        if (tok_is(p, p->pos, "at") || tok_is(p, p->pos, "within")) {
-            it->when = tok_is(p, p->pos, "at") ? W_AT : W_WITHIN;
-            p->pos++;
-            it->lo_tok = p->pos;
-            if (!want_kind(p, TK_INT, "an integer")) return 0;
-            it->lo = int_token(p, it->lo_tok, &it->lo_ovf);
-            it->hi_tok = it->lo_tok;
-            if (it->when == W_WITHIN) {
-                if (!want(p, "..")) return 0;
-                it->hi_tok = p->pos;
-                if (!want_kind(p, TK_INT, "an integer")) return 0;
-            }
-            it->hi = int_token(p, it->hi_tok, &it->hi_ovf);
-        } else if (tok_is(p, p->pos, "final") || tok_is(p, p->pos, "always")) {
-            it->when = tok_is(p, p->pos, "final") ? W_FINAL : W_ALWAYS;
-            p->pos++;
-        } else {
-            p_error(p, p->pos, "syntax error: expected `at`, `within`, `final` or `always`, found %s", found(p, p->pos));
-            return 0;
-        }
-        if (!want(p, ":")) return 0;
-        /* The condition is not checked by the compiled program: skip it, up
-         * to the keyword that begins the next item (a keyword there only
-         * where an expression may end, as the contextual lexer reads it). */
-        if (tk(p, p->pos)->kind == TK_EOF) {
-            p_error(p, p->pos, "syntax error: expected an expression, found end of file");
-            return 0;
-        }
-        p->pos++;
-        while (tk(p, p->pos)->kind != TK_EOF && !(can_end_expr(p, p->pos - 1) && item_keyword(p, p->pos))) p->pos++;
-        return 1;
-    }
-    p_error(p, p->pos, "syntax error: unexpected %s (expected `scenario`, `cycles`, `at` or `expect`)", found(p, p->pos));
-    return 0;
-}
-
-/* ---- checking ---- */
-
-static const rcs_type *find_type(const parser *p, size_t tok, rcs_kind kind) {
-    for (size_t i = 0; i < p->d->n_types; i++)
-        if (p->d->types[i]->kind == kind && tok_names(p, tok, p->d->types[i]->name)) return p->d->types[i];
-    return NULL;
-}
-
-static const rcs_const *find_const(const parser *p, size_t tok) {
-    for (size_t i = 0; i < p->d->n_consts; i++)
-        if (tok_names(p, tok, p->d->consts[i].name)) return &p->d->consts[i];
-    return NULL;
-}
-
-static void mismatch(parser *p, size_t at, const rcs_type *expected, const char *found_type) {
-    p_error(p, at, "mismatched types: expected `%s`, found `%s`%s", expected->name, found_type,
-            expected->kind == RCS_T_DURATION && strcmp(found_type, "duration") != 0 && strcmp(found_type, "bool") != 0
-                ? " (a duration needs a unit: `us`, `ms` or `s`)"
-                : "");
-}
-
-static void put_i32(unsigned char *dst, int32_t v) { memcpy(dst, &v, sizeof v); }
-static void put_i64(unsigned char *dst, int64_t v) { memcpy(dst, &v, sizeof v); }
-static void put_u32(unsigned char *dst, uint32_t v) { memcpy(dst, &v, sizeof v); }
-static void put_f64(unsigned char *dst, double v) { memcpy(dst, &v, sizeof v); }
-static void put_bool(unsigned char *dst, bool v) { memcpy(dst, &v, sizeof v); }
-
-static int range_error(parser *p, size_t at, const char *type, const char *range) {
-    p_error(p, at, "integer literal out of range for `%s` (`%s` holds %s)", type, type, range);
-    return 0;
-}
-
-/* An integer literal (negated when `neg`) as a value of type t. */
-static int store_int(parser *p, const vnode *v, int neg, const rcs_type *t, unsigned char *dst, size_t at) {
-    static const char R_I32[] = "-2147483648..2147483647", R_I64[] = "-9223372036854775808..9223372036854775807",
-                      R_U32[] = "0..4294967295";
-    const uint64_t m = v->mag, two63 = (uint64_t)1 << 63;
-    const int ovf = v->ovf;
+    uint64_t v;
+    if (!ev_number(r, (*k)++, 16, &v)) return 0;
+    uint64_t limit = t->kind == RCS_T_BOOL ? 1u
+                   : t->kind == RCS_T_ENUM ? (uint64_t)(t->n_members ? t->n_members - 1u : 0u)
+                   : t->kind == RCS_T_I32 || t->kind == RCS_T_U32 ? UINT32_MAX : UINT64_MAX;
+    if (v > limit || (t->kind == RCS_T_ENUM && t->n_members == 0))
+        return ev_error(r, "value %" PRIx64 " does not fit the type `%s`", v, t->name);
     switch (t->kind) {
-    case RCS_T_F64: {
-        double x = strtod(clean_number(p, v->tok, neg), NULL); /* correctly rounded, like float(int) */
-        if (x > DBL_MAX || x < -DBL_MAX) return range_error(p, at, "f64", "integers up to about 1.8e308");
-        put_f64(dst, x == 0.0 ? 0.0 : x); /* float(-0) is 0.0 */
-        return 1;
-    }
-    case RCS_T_I32:
-        if (ovf || m > (neg ? (uint64_t)2147483648u : (uint64_t)2147483647u)) return range_error(p, at, "i32", R_I32);
-        put_i32(dst, neg ? (int32_t)(-(int64_t)m) : (int32_t)m);
-        return 1;
-    case RCS_T_I64:
-        if (ovf || m > (neg ? two63 : two63 - 1u)) return range_error(p, at, "i64", R_I64);
-        put_i64(dst, neg ? (m == two63 ? INT64_MIN : -(int64_t)m) : (int64_t)m);
-        return 1;
-    case RCS_T_U32:
-        if (ovf || (neg && m != 0) || m > UINT32_MAX) return range_error(p, at, "u32", R_U32);
-        put_u32(dst, (uint32_t)m);
-        return 1;
-    default:
-        /* An untyped literal is an i32 if it fits, else an i64. */
-        if (!ovf && m <= (neg ? (uint64_t)2147483648u : (uint64_t)2147483647u))
-            mismatch(p, at, t, "i32");
-        else if (!ovf && m <= (neg ? two63 : two63 - 1u))
-            mismatch(p, at, t, "i64");
-        else
-            range_error(p, at, "i64", R_I64);
-        return 0;
-    }
-}
-
-static int match_args(parser *p, const rcs_field *params, size_t n, const varg *args, size_t n_args, const char *what,
-                      int record, size_t call_tok, const varg **slots) {
-    int named_seen = 0;
-    for (size_t k = 0; k < n; k++) slots[k] = NULL;
-    for (size_t i = 0; i < n_args; i++) {
-        const varg *a = &args[i];
-        if (!a->named) {
-            if (named_seen) {
-                p_error(p, a->tok, "positional argument after a named one");
-                return 0;
-            }
-            if (i >= n) {
-                p_error(p, a->tok, "%s takes %zu argument%s, %zu given", what, n, n == 1 ? "" : "s", n_args);
-                return 0;
-            }
-            slots[i] = a;
-            continue;
-        }
-        named_seen = 1;
-        size_t k = 0;
-        while (k < n && !tok_names(p, a->name_tok, params[k].name)) k++;
-        if (k == n) {
-            p_error(p, a->name_tok, "%s has no %s `%.*s`", what, record ? "field" : "parameter", TXT(p, a->name_tok));
-            return 0;
-        }
-        if (slots[k] != NULL) {
-            p_error(p, a->name_tok, "parameter `%.*s` given twice", TXT(p, a->name_tok));
-            return 0;
-        }
-        slots[k] = a;
-    }
-    size_t given = 0;
-    char missing[256];
-    size_t len = 0;
-    missing[0] = '\0';
-    for (size_t k = 0; k < n; k++) {
-        if (slots[k] != NULL) {
-            given++;
-        } else if (len < sizeof missing) {
-            int w = snprintf(missing + len, sizeof missing - len, "%s`%s`", len ? ", " : "", params[k].name);
-            len += w > 0 ? (size_t)w : 0;
-        }
-    }
-    if (given < n) {
-        p_error(p, call_tok, "%s takes %zu argument%s, %zu given (missing %s)", what, n, n == 1 ? "" : "s", given, missing);
-        return 0;
+    case RCS_T_BOOL: { bool b = v != 0; memcpy(dst, &b, sizeof b); break; }
+    case RCS_T_I32: case RCS_T_ENUM: { uint32_t u = (uint32_t)v; memcpy(dst, &u, sizeof u); break; }
+    case RCS_T_U32: { uint32_t u = (uint32_t)v; memcpy(dst, &u, sizeof u); break; }
+    case RCS_T_F64: case RCS_T_I64: case RCS_T_DURATION: memcpy(dst, &v, sizeof v); break;
+    case RCS_T_RECORD: break;
     }
     return 1;
 }
 
-static int store_value(parser *p, const vnode *v, const rcs_type *t, unsigned char *dst, size_t at);
-
-static void unknown_name(parser *p, size_t tok) { p_error(p, tok, "cannot find `%.*s` in this scope", TXT(p, tok)); }
-
-/* The type a value has on its own (NULL after an error). */
-static const rcs_type *natural_type(parser *p, const vnode *v) {
-    switch (v->kind) {
-    case V_INT: return !v->ovf && v->mag <= 2147483647u ? &rcs_type_i32 : &rcs_type_i64;
-    case V_FLOAT: return &rcs_type_f64;
-    case V_DUR: return &rcs_type_duration;
-    case V_BOOL: return &rcs_type_bool;
-    case V_NEG: return natural_type(p, v->sub);
-    case V_NAME: {
-        const rcs_const *c = find_const(p, v->tok);
-        if (c == NULL) unknown_name(p, v->tok);
-        return c ? c->type : NULL;
-    }
-    case V_MEMBER: {
-        const rcs_type *et = find_type(p, v->tok, RCS_T_ENUM);
-        if (et == NULL) {
-            if (find_const(p, v->tok))
-                p_error(p, v->tok, "%s", UNSUPPORTED);
-            else
-                unknown_name(p, v->tok);
-        }
-        return et;
-    }
-    case V_CALL: {
-        const rcs_type *rt = find_type(p, v->tok, RCS_T_RECORD);
-        if (rt == NULL) p_error(p, v->tok, "%s", UNSUPPORTED);
-        return rt;
-    }
-    }
-    return NULL;
-}
-
-static int store_neg(parser *p, const vnode *v, const rcs_type *t, unsigned char *dst) {
-    const vnode *s = v->sub;
-    if (s->kind == V_INT) return store_int(p, s, 1, t, dst, v->tok);
-    const rcs_type *nt = natural_type(p, s);
-    if (nt == NULL) return 0;
-    if (!is_numeric(nt->kind)) {
-        p_error(p, v->tok, "cannot negate a value of type `%s`", nt->name);
-        return 0;
-    }
-    unsigned char *tmp = p_alloc(p, type_extent(t));
-    if (!store_value(p, s, t, tmp, v->tok)) return 0;
-    union {
-        int32_t i32;
-        int64_t i64;
-        uint32_t u32;
-        double f64;
-    } u;
-    switch (t->kind) { /* numeric: s had t's type */
-    case RCS_T_I32: memcpy(&u.i32, tmp, sizeof u.i32); put_i32(dst, rcs_neg_i32(u.i32)); break;
-    case RCS_T_I64:
-    case RCS_T_DURATION: memcpy(&u.i64, tmp, sizeof u.i64); put_i64(dst, rcs_neg_i64(u.i64)); break;
-    case RCS_T_U32: memcpy(&u.u32, tmp, sizeof u.u32); put_u32(dst, rcs_neg_u32(u.u32)); break;
-    case RCS_T_F64: memcpy(&u.f64, tmp, sizeof u.f64); put_f64(dst, -u.f64); break;
-    default: p_error(p, v->tok, "cannot negate a value of type `%s`", t->name); return 0;
-    }
+/* The leaf count at w[at] and the leaves after it: the values of fields f[0..n_f) into blob. */
+static int ev_values(ev_reader *r, size_t at, const rcs_field *f, size_t n_f, unsigned char *blob) {
+    size_t want = 0, k = at + 1;
+    for (size_t i = 0; i < n_f; i++) want += count_leaves(f[i].type);
+    uint64_t n;
+    if (!ev_number(r, at, 10, &n)) return 0;
+    if (n != want || r->n != at + 1 + want)
+        return ev_error(r, "%zu values given, the design expects %zu", r->n > at ? r->n - at - 1 : 0, want);
+    for (size_t i = 0; i < n_f; i++)
+        if (!ev_value(r, f[i].type, blob + f[i].offset, &k)) return 0;
     return 1;
 }
 
-/* Checks value v against type t and writes it at dst; errors point at `at`
- * (v's first token, or the `-` before it). */
-static int store_value(parser *p, const vnode *v, const rcs_type *t, unsigned char *dst, size_t at) {
-    switch (v->kind) {
-    case V_INT: return store_int(p, v, 0, t, dst, at);
-    case V_NEG: return store_neg(p, v, t, dst);
-    case V_FLOAT:
-        if (t->kind != RCS_T_F64) {
-            mismatch(p, at, t, "f64");
-            return 0;
-        }
-        put_f64(dst, strtod(clean_number(p, v->tok, 0), NULL)); /* correctly rounded, like float() */
-        return 1;
-    case V_DUR:
-        if (v->ovf) {
-            p_error(p, v->tok, "duration literal out of range for `duration` (at most %" PRId64 " ns)", INT64_MAX);
-            return 0;
-        }
-        if (t->kind != RCS_T_DURATION) {
-            mismatch(p, at, t, "duration");
-            return 0;
-        }
-        put_i64(dst, v->ns);
-        return 1;
-    case V_BOOL:
-        if (t->kind != RCS_T_BOOL) {
-            mismatch(p, at, t, "bool");
-            return 0;
-        }
-        put_bool(dst, v->b);
-        return 1;
-    case V_NAME: {
-        const rcs_const *c = find_const(p, v->tok);
-        if (c == NULL) {
-            unknown_name(p, v->tok);
-            return 0;
-        }
-        if (!type_eq(c->type, t)) { /* no implicit conversion of typed constants */
-            mismatch(p, at, t, c->type->name);
-            return 0;
-        }
-        copy_typed(t, dst, (const unsigned char *)c->value);
-        return 1;
-    }
-    case V_MEMBER: {
-        const rcs_type *et = natural_type(p, v);
-        if (et == NULL) return 0;
-        size_t k = 0;
-        while (k < et->n_members && !tok_names(p, v->tok2, et->members[k])) k++;
-        if (k == et->n_members) {
-            p_error(p, v->tok2, "enum `%s` has no member `%.*s`", et->name, TXT(p, v->tok2));
-            return 0;
-        }
-        if (!type_eq(et, t)) {
-            mismatch(p, at, t, et->name);
-            return 0;
-        }
-        put_i32(dst, (int32_t)k);
-        return 1;
-    }
-    case V_CALL: {
-        const rcs_type *rt = natural_type(p, v);
-        if (rt == NULL) return 0;
-        char what[160];
-        snprintf(what, sizeof what, "record `%s`", rt->name);
-        const varg **slots = p_alloc(p, rt->n_fields * sizeof *slots);
-        if (!match_args(p, rt->fields, rt->n_fields, v->args, v->n_args, what, 1, v->tok, slots)) return 0;
-        unsigned char *tmp = p_alloc(p, type_extent(rt));
-        for (size_t k = 0; k < rt->n_fields; k++)
-            if (!store_value(p, slots[k]->value, rt->fields[k].type, tmp + rt->fields[k].offset, slots[k]->value->tok))
-                return 0;
-        if (!type_eq(rt, t)) {
-            mismatch(p, at, t, rt->name);
-            return 0;
-        }
-        copy_typed(t, dst, tmp);
-        return 1;
-    }
-    }
-    return 0;
+static int ev_tick(ev_reader *r, const rcs_scenario *sc, uint64_t *last, uint64_t *out) {
+    if (!ev_number(r, 1, 10, out)) return 0;
+    if (*out < 1 || *out > sc->cycles)
+        return ev_error(r, "tick %" PRIu64 " is outside the scenario's cycles 1..%" PRIu64, *out, sc->cycles);
+    if (*out < *last) return ev_error(r, "tick %" PRIu64 " comes after tick %" PRIu64 ": events are in time order", *out, *last);
+    *last = *out;
+    return 1;
 }
 
-static void add_event(event **arr, size_t *n, size_t *cap, const event *e) {
-    grow((void **)arr, cap, *n, sizeof **arr);
-    (*arr)[(*n)++] = *e;
-}
-
-static int check_command(parser *p, rcs_scenario *sc, const item *it, size_t seq) {
-    const rcs_design *d = p->d;
-    size_t ci = 0;
-    while (ci < d->n_ctrls && !tok_names(p, it->name_tok, d->ctrls[ci].name)) ci++;
-    if (ci == d->n_ctrls) {
-        p_error(p, it->name_tok, "no controller named `%.*s`", TXT(p, it->name_tok));
-        return 0;
-    }
-    const rcs_ctrl *c = &d->ctrls[ci];
-    if (!c->top) {
-        p_error(p, it->name_tok, "`%s` takes commands only from its supervisor", c->name);
-        return 0;
-    }
-    size_t vi = 0;
-    while (vi < c->n_verbs && !tok_names(p, it->name2_tok, c->verbs[vi].name)) vi++;
-    if (vi == c->n_verbs) {
-        p_error(p, it->name2_tok, "`%s` does not accept the verb `%.*s`", c->name, TXT(p, it->name2_tok));
-        return 0;
-    }
-    const rcs_verb *v = &c->verbs[vi];
-    char what[200];
-    snprintf(what, sizeof what, "`%s.%s`", c->name, v->name);
-    const varg **slots = p_alloc(p, v->n_params * sizeof *slots);
-    if (!match_args(p, v->params, v->n_params, it->args, it->n_args, what, 0, it->tok, slots)) return 0;
-    size_t size = c->cmd_args_size;
-    for (size_t k = 0; k < v->n_params; k++) {
-        size_t e = v->params[k].offset + type_extent(v->params[k].type);
-        if (e > size) size = e;
-    }
+static int ev_record(ev_reader *r, rcs_scenario *sc, uint64_t last[4]) {
+    const rcs_design *d = r->d;
+    const char *kw = r->w[0];
+    uint64_t tick = 0;
+    size_t id = 0;
     event ev;
-    ev.cycle = it->num_ovf ? UINT64_MAX : it->num;
-    ev.seq = seq;
-    ev.target = ci;
-    ev.verb = vi;
-    ev.blob = xcalloc(1, size);
-    add_event(&sc->commands, &sc->n_commands, &sc->cap_commands, &ev);
-    for (size_t k = 0; k < v->n_params; k++)
-        if (!store_value(p, slots[k]->value, v->params[k].type, ev.blob + v->params[k].offset, slots[k]->value->tok))
-            return 0;
-    return 1;
-}
-
-static int check_input(parser *p, rcs_scenario *sc, const item *it, size_t seq) {
-    const rcs_design *d = p->d;
-    size_t gi = 0;
-    while (gi < d->n_gm && !tok_names(p, it->name_tok, d->gm_fields[gi].name)) gi++;
-    if (gi == d->n_gm) {
-        p_error(p, it->name_tok, "no Global Memory variable named `%.*s`", TXT(p, it->name_tok));
-        return 0;
+    memset(&ev, 0, sizeof ev);
+    if (strcmp(kw, "input") == 0) {
+        if (!ev_tick(r, sc, &last[0], &tick) || !ev_index(r, 2, d->n_gm, "Global Memory variable", &id)) return 0;
+        if (d->gm_from_env == NULL || !d->gm_from_env[id])
+            return ev_error(r, "`%s` is written by a controller, not by the environment", d->gm_fields[id].name);
+        rcs_field f = d->gm_fields[id];
+        f.offset = 0;
+        ev.blob = xcalloc(1, type_extent(f.type));
+        ev.cycle = tick;
+        ev.target = id;
+        grow((void **)&sc->inputs, &sc->cap_inputs, sc->n_inputs, sizeof *sc->inputs);
+        sc->inputs[sc->n_inputs++] = ev;
+        return ev_values(r, 3, &f, 1, ev.blob);
     }
-    if (d->gm_from_env == NULL || !d->gm_from_env[gi]) {
-        p_error(p, it->name_tok, "`%s` is written by a controller, not by the environment", d->gm_fields[gi].name);
-        return 0;
+    if (strcmp(kw, "command") == 0) {
+        size_t vi = 0;
+        if (!ev_tick(r, sc, &last[1], &tick) || !ev_index(r, 2, d->n_ctrls, "controller", &id)) return 0;
+        const rcs_ctrl *c = &d->ctrls[id];
+        if (!c->top) return ev_error(r, "`%s` takes commands only from its supervisor", c->name);
+        if (!ev_index(r, 3, c->n_verbs, "verb", &vi)) return 0;
+        const rcs_verb *v = &c->verbs[vi];
+        size_t size = c->cmd_args_size;
+        for (size_t k = 0; k < v->n_params; k++) {
+            size_t e = v->params[k].offset + type_extent(v->params[k].type);
+            if (e > size) size = e;
+        }
+        ev.blob = xcalloc(1, size);
+        ev.cycle = tick;
+        ev.target = id;
+        ev.verb = vi;
+        grow((void **)&sc->commands, &sc->cap_commands, sc->n_commands, sizeof *sc->commands);
+        sc->commands[sc->n_commands++] = ev;
+        return ev_values(r, 4, v->params, v->n_params, ev.blob);
     }
-    event ev;
-    ev.cycle = it->num_ovf ? UINT64_MAX : it->num;
-    ev.seq = seq;
-    ev.target = gi;
-    ev.verb = 0;
-    ev.blob = xcalloc(1, type_extent(d->gm_fields[gi].type));
-    add_event(&sc->inputs, &sc->n_inputs, &sc->cap_inputs, &ev);
-    return store_value(p, it->value, d->gm_fields[gi].type, ev.blob, it->value->tok);
-}
-
-/* `at N: stop CPU` / `at N: freeze CTRL`, as rcsc/front/scenario.py checks them. */
-static int check_fault(parser *p, rcs_scenario *sc, const item *it) {
-    const rcs_design *d = p->d;
-    const uint64_t tick = it->num_ovf ? UINT64_MAX : it->num;
-    if (it->kind == I_STOP) {
+    if (strcmp(kw, "stop") == 0 || strcmp(kw, "freeze") == 0) {
+        const int stop = kw[0] == 's';
         const rcs_multi *mc = d->multi;
-        size_t n = mc ? mc->n_cpus : 1, i = 0;
-        while (i < n && !tok_names(p, it->name_tok, mc ? mc->cpu_names[i] : d->cpu)) i++;
-        if (i == n) {
-            p_error(p, it->name_tok, "`stop` needs a CPU; the design has no CPU named `%.*s`", TXT(p, it->name_tok));
-            return 0;
-        }
-        if (i == (mc ? mc->self : 0) && (sc->stop_tick == 0 || tick < sc->stop_tick)) sc->stop_tick = tick;
+        if (!ev_tick(r, sc, &last[stop ? 2 : 3], &tick)) return 0;
+        if (!ev_index(r, 2, stop ? (mc ? mc->n_cpus : 1u) : d->n_ctrls, stop ? "CPU" : "controller", &id)) return 0;
+        if (r->n != 3) return ev_error(r, "`%s` takes a tick and one id", kw);
+        uint64_t *slot = stop ? (id == (mc ? mc->self : 0u) ? &sc->stop_tick : NULL) : &sc->freeze_tick[id];
+        if (slot != NULL && (*slot == 0 || tick < *slot)) *slot = tick;
         return 1;
     }
-    size_t ci = 0;
-    while (ci < d->n_ctrls && !tok_names(p, it->name_tok, d->ctrls[ci].name)) ci++;
-    if (ci == d->n_ctrls) {
-        p_error(p, it->name_tok, "`freeze` needs a controller; the design has no controller named `%.*s`",
-                TXT(p, it->name_tok));
-        return 0;
-    }
-    if (sc->freeze_tick[ci] == 0 || tick < sc->freeze_tick[ci]) sc->freeze_tick[ci] = tick;
-    return 1;
-}
-
-static void num_text(const parser *p, size_t tok, uint64_t v, int ovf, char *buf, size_t size) {
-    if (ovf)
-        snprintf(buf, size, "%.*s", TXT(p, tok));
-    else
-        snprintf(buf, size, "%" PRIu64, v);
-}
-
-static int check_range(parser *p, size_t at, size_t num_tok, uint64_t v, int ovf, uint64_t cycles) {
-    if (!ovf && v >= 1 && v <= cycles) return 1;
-    char buf[64];
-    num_text(p, num_tok, v, ovf, buf, sizeof buf);
-    p_error(p, at, "cycle %s is outside the scenario's cycles 1..%" PRIu64, buf, cycles);
-    return 0;
-}
-
-static int event_cmp(const void *a, const void *b) {
-    const event *x = a, *y = b;
-    if (x->cycle != y->cycle) return x->cycle < y->cycle ? -1 : 1;
-    return x->seq < y->seq ? -1 : x->seq > y->seq ? 1 : 0;
-}
-
-static int check_items(parser *p, rcs_scenario *sc) {
-    int have_cycles = 0;
-    size_t cycles_tok = 0;
-    uint64_t cycles = 0;
-    for (size_t i = 0; i < p->n_items; i++) {
-        const item *it = &p->items[i];
-        switch (it->kind) {
-        case I_NAME: break;
-        case I_CYCLES:
-            if (have_cycles) {
-                p_error(p, it->tok, "`cycles` is given more than once");
-                return 0;
-            }
-            if (it->num_ovf) {
-                p_error(p, it->num_tok, "`cycles %.*s` is too large", TXT(p, it->num_tok));
-                return 0;
-            }
-            have_cycles = 1;
-            cycles = it->num;
-            cycles_tok = it->num_tok;
-            break;
-        case I_COMMAND:
-            if (!check_command(p, sc, it, i)) return 0;
-            break;
-        case I_INPUT:
-            if (!check_input(p, sc, it, i)) return 0;
-            break;
-        case I_STOP:
-        case I_FREEZE:
-            if (!check_fault(p, sc, it)) return 0;
-            break;
-        case I_EXPECT:
-            if (it->when == W_WITHIN && (it->lo_ovf || (!it->hi_ovf && it->lo > it->hi))) {
-                char lo[64], hi[64];
-                num_text(p, it->lo_tok, it->lo, it->lo_ovf, lo, sizeof lo);
-                num_text(p, it->hi_tok, it->hi, it->hi_ovf, hi, sizeof hi);
-                p_error(p, it->when_tok, "empty window: %s is after %s", lo, hi);
-                return 0;
-            }
-            break;
-        }
-    }
-    if (!have_cycles) {
-        p_error_at(p, 1, 1, "the scenario does not say how many cycles to run (add a line such as `cycles 200`)");
-        return 0;
-    }
-    if (cycles == 0) {
-        p_error(p, cycles_tok, "a scenario runs at least one cycle");
-        return 0;
-    }
-    sc->cycles = cycles;
-    /* As rcsc/front/scenario.py reports them: commands, inputs, then windows. */
-    for (int pass = 0; pass < 4; pass++) {
-        for (size_t i = 0; i < p->n_items; i++) {
-            const item *it = &p->items[i];
-            int ok = 1;
-            if (pass == 0 && it->kind == I_COMMAND) ok = check_range(p, it->num_tok, it->num_tok, it->num, it->num_ovf, cycles);
-            if (pass == 1 && (it->kind == I_INPUT || it->kind == I_STOP || it->kind == I_FREEZE))
-                ok = check_range(p, it->num_tok, it->num_tok, it->num, it->num_ovf, cycles);
-            if (pass == 2 && it->kind == I_EXPECT && (it->when == W_AT || it->when == W_WITHIN))
-                ok = check_range(p, it->tok, it->hi_tok, it->hi, it->hi_ovf, cycles);
-            if (pass == 3 && it->kind == I_EXPECT && (it->when == W_AT || it->when == W_WITHIN))
-                ok = check_range(p, it->tok, it->lo_tok, it->lo, it->lo_ovf, cycles);
-            if (!ok) return 0;
-        }
-    }
-    if (sc->n_inputs) qsort(sc->inputs, sc->n_inputs, sizeof *sc->inputs, event_cmp);
-    if (sc->n_commands) qsort(sc->commands, sc->n_commands, sizeof *sc->commands, event_cmp);
-    return 1;
+    return ev_error(r, "unknown record `%.40s` (expected input, command, stop, freeze or end)", kw);
 }
 
 static char *read_file(const char *path, size_t *len) {
@@ -1251,32 +323,92 @@ void rcs_scenario_free(rcs_scenario *sc) {
     free(sc);
 }
 
+/* Splits line `s` (no newline) into words at single spaces. */
+static int ev_split(ev_reader *r, char *s) {
+    r->n = 0;
+    for (char *p = s;;) {
+        if (r->n == EV_MAX_WORDS) return ev_error(r, "a line of more than %u numbers", EV_MAX_WORDS);
+        r->w[r->n++] = p;
+        char *sp = strchr(p, ' ');
+        if (sp == NULL) break;
+        *sp = '\0';
+        p = sp + 1;
+    }
+    for (size_t i = 0; i < r->n; i++)
+        if (r->w[i][0] == '\0') return ev_error(r, "an empty word (numbers are separated by one space)");
+    return 1;
+}
+
+static int ev_read(ev_reader *r, char *text, size_t len, rcs_scenario *sc) {
+    const rcs_design *d = r->d;
+    static const char hint[] = "compile the scenario with `rcsc events DESIGN SCENARIO -o FILE` (docs/events.md)";
+    uint64_t last[4] = {0, 0, 0, 0}, records = 0;
+    size_t at = 0;
+    r->line = 1;
+    if (strncmp(text, "rcsc-events ", 12) != 0) return ev_error(r, "not an rcsc event file; %s", hint);
+    for (size_t i = 0; i < len; i++) {
+        const unsigned char c = (unsigned char)text[i];
+        if (c == '\n')
+            r->line++;
+        else if (c < 0x20u || c > 0x7eu)
+            return ev_error(r, "byte 0x%02x is not printable ASCII", (unsigned)c);
+    }
+    r->line = 0;
+    for (;;) {
+        r->line++;
+        char *nl = at < len ? memchr(text + at, '\n', len - at) : NULL;
+        if (nl == NULL) return ev_error(r, "the file is truncated (no `end` line)");
+        *nl = '\0';
+        char *s = text + at;
+        at = (size_t)(nl - text) + 1;
+        if (r->line == 1) {
+            uint64_t version;
+            if (!ev_split(r, s)) return 0;
+            if (r->n != 4) return ev_error(r, "not an rcsc event file; %s", hint);
+            if (!ev_number(r, 1, 10, &version)) return 0;
+            if (version != 1) return ev_error(r, "event file version %" PRIu64 "; this Main Program reads version 1", version);
+            if (strcmp(r->w[2], d->design) != 0 || strcmp(r->w[3], d->events_hash) != 0)
+                return ev_error(r, "the event file is for design `%.60s` (interface %.20s), this Main Program for `%s` (interface %s); %s",
+                                r->w[2], r->w[3], d->design, d->events_hash, hint);
+            continue;
+        }
+        if (!ev_split(r, s)) return 0;
+        if (r->line == 2) {
+            if (strcmp(r->w[0], "cycles") != 0 || r->n != 2) return ev_error(r, "expected `cycles N`");
+            if (!ev_number(r, 1, 10, &sc->cycles)) return 0;
+            if (sc->cycles < 1 || sc->cycles > UINT32_MAX) return ev_error(r, "cycles %" PRIu64 " is outside 1..4294967295", sc->cycles);
+            continue;
+        }
+        if (strcmp(r->w[0], "end") == 0) {
+            uint64_t n;
+            if (r->n != 2 || !ev_number(r, 1, 10, &n)) return r->n != 2 ? ev_error(r, "expected `end N`") : 0;
+            if (n != records) return ev_error(r, "`end %" PRIu64 "` but the file has %" PRIu64 " events", n, records);
+            if (at != len) return ev_error(r, "text after the `end` line");
+            return 1;
+        }
+        if (!ev_record(r, sc, last)) return 0;
+        records++;
+    }
+}
+
 rcs_scenario *rcs_scenario_load(const char *path, const rcs_design *d, FILE *err) {
-    parser p;
-    memset(&p, 0, sizeof p);
-    p.path = path;
-    p.err = err ? err : stderr;
-    p.d = d;
-    p.text = read_file(path, &p.text_len);
-    if (p.text == NULL) {
-        fprintf(p.err, "%s: error: cannot read the scenario: %s\n", path, strerror(errno));
+    ev_reader *r = xcalloc(1, sizeof *r);
+    r->path = path;
+    r->err = err ? err : stderr;
+    r->d = d;
+    size_t len = 0;
+    char *text = read_file(path, &len);
+    if (text == NULL) {
+        fprintf(r->err, "%s: error: cannot read the event file: %s\n", path, strerror(errno));
+        free(r);
         return NULL;
     }
     rcs_scenario *sc = xcalloc(1, sizeof *sc);
     sc->freeze_tick = xcalloc(d->n_ctrls ? d->n_ctrls : 1, sizeof *sc->freeze_tick);
-    int ok = lex(&p);
-    while (ok && tk(&p, p.pos)->kind != TK_EOF) {
-        grow((void **)&p.items, &p.cap_items, p.n_items, sizeof *p.items);
-        ok = parse_item(&p, &p.items[p.n_items]);
-        p.n_items++;
-    }
-    if (ok) ok = check_items(&p, sc);
-    for (size_t i = 0; i < p.n_allocs; i++) free(p.allocs[i]);
-    free(p.allocs);
-    free(p.items);
-    free(p.toks);
-    free(p.text);
-    if (!ok || p.failed) {
+    int ok = ev_read(r, text, len, sc);
+    free(text);
+    free(r);
+    if (!ok) {
         rcs_scenario_free(sc);
         return NULL;
     }
@@ -1546,7 +678,8 @@ static void usage(FILE *o, const char *prog, const rcs_design *d) {
             "  --fast            run the cycles back to back (no sleeping)\n"
             "  --cycles N        run N cycles (default: the scenario's cycles; without a\n"
             "                    scenario, until `q` on the console or SIGINT/SIGTERM)\n"
-            "  --scenario FILE   apply the operator commands and inputs of FILE (.scn)\n"
+            "  --scenario FILE   apply the operator commands and inputs of FILE, an event\n"
+            "                    file from `rcsc events DESIGN SCENARIO -o FILE`\n"
             "  --trace FILE      write the JSON-lines trace to FILE (`-`: standard output)\n"
             "  --realtime        lock memory and run under SCHED_FIFO (needs privileges)\n"
             "  --no-timing       do not print the timing table at exit\n"
@@ -1565,7 +698,7 @@ static int parse_count(const char *s, uint64_t *out) {
     uint64_t v = 0;
     if (s == NULL || *s == '\0') return 0;
     for (; *s; s++) {
-        if (!is_digit(*s)) return 0;
+        if (*s < '0' || *s > '9') return 0;
         uint64_t dgt = (uint64_t)(*s - '0');
         if (v > (UINT64_MAX - dgt) / 10u) return 0;
         v = v * 10u + dgt;

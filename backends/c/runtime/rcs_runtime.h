@@ -5,8 +5,8 @@
  * Hosted, POSIX.  The generated main_<CPU>.c describes its design with the
  * tables below (types, Global Memory, constants, controllers, schedule)
  * and calls rcs_main(); this file's .c does the rest: options, the
- * heartbeat on absolute deadlines, the scenario reader (.scn, as
- * `rcsc sim` reads it), the JSON-lines trace (byte for byte as
+ * heartbeat on absolute deadlines, the event reader (a scenario that
+ * `rcsc events` compiled, docs/events.md), the JSON-lines trace (byte for byte as
  * `rcsc sim --trace-format jsonl`), the timing table, real-time mode and
  * the console (pause, single step, quit).  The controllers never call it:
  * they stay freestanding.
@@ -144,6 +144,8 @@ typedef struct {
     const size_t *gm_stamps;
     /* Several CPUs: this CPU's place among them (NULL: a single-CPU design). */
     const rcs_multi *multi;
+    /* The interface hash an event file must carry (docs/events.md). */
+    const char *events_hash;
 } rcs_design;
 
 /* Runs the Main Program; returns the process exit status. */
@@ -153,8 +155,8 @@ int rcs_main(int argc, char **argv, const rcs_design *d);
 
 typedef struct rcs_scenario rcs_scenario;
 
-/* Reads a .scn file against `d`.  On an error prints `FILE:LINE:COL: error: ...`
- * to `err` and returns NULL. */
+/* Reads an event file (docs/events.md) against `d`.  On an error prints
+ * `FILE:LINE: error: ...` to `err` and returns NULL. */
 rcs_scenario *rcs_scenario_load(const char *path, const rcs_design *d, FILE *err);
 /* The scenario's `cycles`. */
 uint64_t rcs_scenario_cycles(const rcs_scenario *sc);

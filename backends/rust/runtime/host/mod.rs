@@ -4,7 +4,8 @@
 // rcs_runtime.h / rcs_runtime.c: same options, messages and output bytes).  Each `src/bin/<cpu>.rs` describes its design with the
 // tables below, implements `HostDesign` over the controller library and
 // calls `run`; this module does the rest: options, the heartbeat on
-// absolute deadlines, the scenario reader (.scn, as `rcsc sim` reads it),
+// absolute deadlines, the event reader (a scenario that `rcsc events`
+// compiled, docs/events.md),
 // the JSON-lines trace (byte for byte as `rcsc sim --trace-format jsonl`),
 // the timing table, real-time mode and the console (pause, single step,
 // quit).  The controllers never call it: the library stays `no_std`.
@@ -131,6 +132,8 @@ pub struct DesignDesc {
     pub schedule: &'static [usize],
     /// Several CPUs: this CPU's place among them (None: a single-CPU design).
     pub multi: Option<&'static MultiDesc>,
+    /// The interface hash an event file must carry (docs/events.md).
+    pub events_hash: &'static str,
 }
 
 /// A value of any type of the language.
@@ -263,7 +266,8 @@ fn usage(prog: &str, d: &DesignDesc) -> String {
          --fast            run the cycles back to back (no sleeping)\n  \
          --cycles N        run N cycles (default: the scenario's cycles; without a\n                    \
          scenario, until `q` on the console or SIGINT/SIGTERM)\n  \
-         --scenario FILE   apply the operator commands and inputs of FILE (.scn)\n  \
+         --scenario FILE   apply the operator commands and inputs of FILE, an event\n                    \
+         file from `rcsc events DESIGN SCENARIO -o FILE`\n  \
          --trace FILE      write the JSON-lines trace to FILE (`-`: standard output)\n  \
          --realtime        lock memory and run under SCHED_FIFO (needs privileges)\n  \
          --no-timing       do not print the timing table at exit\n  \
@@ -555,18 +559,20 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
 
     let mut sc: Option<Scenario> = None;
     if let Some(path) = &opt.scenario {
-        let text = match std::fs::read(path) {
-            Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
+        let bytes = match std::fs::read(path) {
+            Ok(bytes) => bytes,
             Err(e) => {
-                say!("{path}: error: cannot read the scenario: {}", strerror(&e));
+                say!(
+                    "{path}: error: cannot read the event file: {}",
+                    strerror(&e)
+                );
                 return 2;
             }
         };
-        let constant = |i: usize| design.constant(i);
-        match Scenario::parse(&text, d, &constant) {
+        match Scenario::parse(&bytes, d) {
             Ok(s) => sc = Some(s),
             Err(e) => {
-                say!("{path}:{}:{}: error: {}", e.line, e.col, e.message);
+                say!("{path}:{}: error: {}", e.line, e.message);
                 return 2;
             }
         }

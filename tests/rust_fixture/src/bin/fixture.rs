@@ -216,6 +216,8 @@ static DESIGN: DesignDesc = DesignDesc {
     ],
     schedule: &[1, 0],
     multi: None,
+    // The interface hash of tests/event_cases.py FIXTURE_RCS.
+    events_hash: "fb17482bafd2da03",
 };
 
 const TOP_STATES: [&str; 5] = ["", "new", "done", "error", "MOVING"];

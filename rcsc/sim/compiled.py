@@ -1,0 +1,193 @@
+"""`rcsc test --target c|rust`: scenarios run on the compiled Main Program (`run_compiled`).
+
+The design is built once per content (a folder under the build directory
+named by the hash of the generated files and the rcsc version, reused while
+it exists), each scenario is compiled to its event file (rcsc/outputs/events.py)
+and run with `--fast` (one CPU) or under the launcher with `--lockstep`
+(several CPUs), and the expectations are evaluated on the program's JSON-lines
+trace by the code the simulator's runs use (rcsc/sim/runner.py).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import subprocess
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import rcsc
+from rcsc.diagnostics import Diagnostics
+from rcsc.front.scenario import Scenario
+from rcsc.outputs import backend
+from rcsc.outputs.events import event_text
+from rcsc.semantics import model as m
+from rcsc.semantics.types import FloatType, RecordType, Type
+from rcsc.sim.runner import RunResult, evaluate_expectation
+from rcsc.sim.trace import CtrlSnapshot, Snapshot
+
+TARGETS = ("c", "rust")
+RUN_TIMEOUT = 600.0
+
+
+class CompiledError(Exception):
+    """A build or a run that did not give a trace (the message says why)."""
+
+
+@dataclass
+class Build:
+    folder: Path
+    program: Path  # the Main Program (one CPU) or the launcher (several CPUs)
+    multi: bool
+
+
+def _key(target: str, files: list[backend.OutFile]) -> str:
+    h = hashlib.sha256(f"rcsc {rcsc.__version__} {target}\n".encode())
+    for f in sorted(files, key=lambda f: f.path):
+        h.update(f"{f.path}\0{len(f.text)}\0".encode())
+        h.update(f.text.encode("utf-8"))
+    return h.hexdigest()[:16]
+
+
+def _run_tool(cmd: list[str], cwd: Path, env: dict | None = None) -> None:
+    try:
+        r = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True, timeout=RUN_TIMEOUT, stdin=subprocess.DEVNULL)
+    except FileNotFoundError as exc:
+        raise CompiledError(f"`{cmd[0]}` is not installed: {exc.strerror}") from exc
+    except subprocess.TimeoutExpired as exc:
+        raise CompiledError(f"`{' '.join(cmd)}` took more than {RUN_TIMEOUT:.0f} s") from exc
+    if r.returncode != 0:
+        raise CompiledError(f"`{' '.join(cmd)}` failed in {cwd}:\n{(r.stdout + r.stderr)[-3000:]}")
+
+
+def build(design: m.Design, target_name: str, build_root: str) -> Build:
+    """The design built for `target_name` under `build_root` (reused when its content is unchanged)."""
+    tg = backend.get_target(target_name)(design, backend.BuildOptions())
+    diags = Diagnostics()
+    tg.check(diags)
+    if diags.has_errors():
+        raise CompiledError("the target refuses the design: " + "; ".join(d.message for d in diags.errors))
+    files = tg.files()
+    folder = Path(build_root) / f"{design.name}-{target_name}-{_key(target_name, files)}"
+    multi = len(design.cpus) > 1
+    if target_name == "c":
+        n = tg.n
+        program = folder / (f"run_{n.p}" if multi else n.binary(next(iter(design.cpus))))
+    else:
+        bins = [b["name"] for b in tomllib.loads(next(f.text for f in files if f.path == "Cargo.toml"))["bin"]]
+        name = next(b for b in bins if b.startswith("run_")) if multi else bins[0]
+        program = folder / "target" / "release" / name
+    done = folder / ".rcsc-built"
+    if done.is_file() and program.is_file():
+        return Build(folder, program, multi)
+    try:
+        backend.write_files(files, str(folder), tg.entry_files)
+    except OSError as exc:
+        raise CompiledError(f"cannot write the build to {folder}: {exc.strerror or exc}") from exc
+    if target_name == "c":
+        _run_tool(["make", "-s"], folder)
+    else:
+        env = dict(os.environ, CARGO_TARGET_DIR=str(folder / "target"), CARGO_TERM_COLOR="never")
+        _run_tool(["cargo", "build", "--offline", "--release", "--quiet"], folder, env)
+    if not program.is_file():
+        raise CompiledError(f"the build did not make {program}")
+    done.write_text(f"{program.name}\n", encoding="utf-8")
+    return Build(folder, program, multi)
+
+
+def _value(v, t: Type):
+    """A trace value as the simulator holds it."""
+    if isinstance(t, RecordType):
+        return {n: _value(v[n], ft) for n, ft in t.fields}
+    if isinstance(t, FloatType):
+        return float(v)  # also "nan", "inf", "-inf"
+    return v
+
+
+def _ctrl(design: m.Design, name: str, s: dict) -> CtrlSnapshot:
+    c = design.controllers[name]
+    fields = {n: _value(s["fields"][n], v.type) for n, v in c.status_fields.items()}
+    return CtrlSnapshot(s["echo"], s["status"], s["verb"], s["state"], s["rule"], s["error_code"], fields)
+
+
+def snapshots(design: m.Design, sc: Scenario, lines: list[dict], multi: bool) -> list[Snapshot]:
+    """What the expectations see at each tick 1..cycles, rebuilt from the program's trace.
+
+    One CPU: the line of the tick (after a `stop`, the last one).  Several
+    CPUs: at tick N (instant (N-1) * base tick) each controller's status and
+    each Global Memory variable as its CPU's latest cycle released by then
+    left them (a variable: on its writer's CPU), inputs as the scenario last
+    set them, the rest at its initial value."""
+    out: list[Snapshot] = []
+    if not multi:
+        by_cycle = {x["cycle"]: x for x in lines}
+        last = None
+        for tick in range(1, sc.cycles + 1):
+            last = by_cycle.get(tick, last)
+            if last is None:
+                raise CompiledError(f"the trace has no line for cycle {tick}")
+            gm = {n: _value(last["gm"][n], v.type) for n, v in design.gm.items()}
+            out.append(Snapshot(tick, gm, {n: _ctrl(design, n, last["ctrl"][n]) for n in design.controllers}))
+        return out
+    writer: dict[str, str] = {}
+    for c in design.controllers.values():
+        for use in c.writes:
+            if c.cpu:
+                writer.setdefault(use.name, c.cpu)
+    base = design.base_tick_ns
+    latest: dict[str, dict] = {}
+    pending = sorted(lines, key=lambda x: x["t"])
+    env = {n: v.init for n, v in design.gm.items() if v.from_env}
+    inputs = sorted(sc.inputs, key=lambda i: i.cycle)
+    k = j = 0
+    for tick in range(1, sc.cycles + 1):
+        instant = (tick - 1) * base
+        while k < len(pending) and pending[k]["t"] <= instant:
+            latest[pending[k]["cpu"]] = pending[k]
+            k += 1
+        while j < len(inputs) and inputs[j].cycle <= tick:
+            env[inputs[j].var] = inputs[j].value
+            j += 1
+        gm = {}
+        for n, v in design.gm.items():
+            w = writer.get(n)
+            if n in env:
+                gm[n] = env[n]
+            elif w in latest:
+                gm[n] = _value(latest[w]["gm"][n], v.type)
+            else:
+                gm[n] = v.init
+        ctrls = {}
+        for n, c in design.controllers.items():
+            cpu = c.cpu or next(iter(design.cpus))
+            if cpu not in latest:
+                raise CompiledError(f"the trace has no cycle of CPU {cpu} by tick {tick}")
+            ctrls[n] = _ctrl(design, n, latest[cpu]["ctrl"][n])
+        out.append(Snapshot(tick, gm, ctrls))
+    return out
+
+
+def run_compiled(design: m.Design, sc: Scenario, b: Build, work: Path) -> RunResult:
+    """Runs `sc` on the built program and evaluates its expectations on the trace."""
+    ctrls = backend.built_controllers(design, backend.BuildOptions())
+    work.mkdir(parents=True, exist_ok=True)
+    events = work / f"{Path(sc.path).stem}.events"
+    trace = work / f"{Path(sc.path).stem}.jsonl"
+    events.write_text(event_text(design, sc, ctrls), encoding="utf-8")
+    mode = ["--lockstep"] if b.multi else ["--fast", "--no-console"]
+    cmd = [str(b.program), *mode, "--no-timing", "--scenario", str(events), "--trace", str(trace)]
+    try:
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=RUN_TIMEOUT, stdin=subprocess.DEVNULL)
+    except subprocess.TimeoutExpired as exc:
+        raise CompiledError(f"the program ran for more than {RUN_TIMEOUT:.0f} s") from exc
+    if r.returncode != 0:
+        raise CompiledError(f"the program exited with status {r.returncode}:\n{r.stderr[-3000:]}")
+    try:
+        lines = [json.loads(x) for x in trace.read_text(encoding="utf-8").splitlines()]
+        snaps = snapshots(design, sc, lines, b.multi)
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise CompiledError(f"the program's trace is unreadable: {exc}") from exc
+    results = [evaluate_expectation(design, x, snaps) for x in sc.expects]
+    return RunResult(sc, snaps, results, multi_cpu=b.multi)
