@@ -43,3 +43,27 @@ def test_nan_reaches_a_parameter_only_through_a_supervisor() -> None:
 def test_a_duration_parameter_is_not_a_wait_for_ever() -> None:
     result = check_path(str(CASES / "ok_duration_waits.rcs"))
     assert [d.code for d in result.diags] == []
+
+
+def test_held_stall_witnesses() -> None:
+    found = _by_line("W0540_held_stall.rcs", "W0540")
+    assert sorted(found) == [24, 30, 35]
+    assert found[24]["witness"] == {"ARM": "done"} and found[24]["path"] == ["L0", "L1"]
+    assert found[24]["held"] == {"ARM": "done"} and found[24]["commanded_by"] == {"ARM": "L0"}
+    assert found[30]["witness"] == {"ARM": "done"} and found[30]["state"] == "BACK"
+    # Behind the `*` error rule: ARM still runs on entry, settles DONE, and a zero count stalls.
+    assert found[35]["witness"] == {"ARM": "done", "cmd.n": 0} and found[35]["held"] == {"ARM": "run"}
+    assert all(d["replayed"] is True for d in found.values())
+
+
+def test_done_unreachable_witnesses() -> None:
+    found = _by_line("W0541_done_unreachable.rcs", "W0541")
+    assert found[21]["path"] == ["P0", "P1"] and found[21]["held"] == {"V": "done"} and found[21]["rules"] == ["P2"]
+    assert found[29]["path"] == ["C0", "C1"] and found[29]["held"] == {"AX": "done"} and found[29]["rules"] == ["C3"]
+
+
+def test_stale_wait_witnesses() -> None:
+    found = _by_line("W0542_stale_wait.rcs", "W0542")
+    assert found[22]["path"] == ["F1"] and found[22]["commanded_by"] == {"ARM": None}
+    assert found[27]["path"] == ["P0"]
+    assert found[34]["path"] == ["S0", "S1"] and found[34]["state"] == "S2"
