@@ -104,11 +104,13 @@ class _Plan:
             # rules' conditions) are made only when a question needs them.
             def contexts(r=r, sources=sources) -> list[list]:
                 out = []
+                self.where = []
                 for s in sources:
                     before = [x for x in rules_in[s] if x.index < r.index and x.guard is not None]
                     if r.otherwise:
                         before = [x for x in rules_in[s] if x.guard is not None]
                     out.append([z3.Not(self.term(x)) for x in before])
+                    self.where.append((s, before))
                 return out
 
             def fired(r=r, contexts=contexts) -> list[list]:
@@ -148,7 +150,7 @@ class _Plan:
         for inp in inputs[self.added:]:
             s.add(inp.constraint)
         self.added = len(inputs)
-        for ctx in contexts:
+        for n, ctx in enumerate(contexts):
             s.push()
             try:
                 s.add(*self.enc.side)
@@ -159,6 +161,7 @@ class _Plan:
             finally:
                 s.pop()
             if model is not None:
+                self.hit = n  # the context (state) of the model: `self.where[n]`
                 return model
             if res != z3.unsat and span is not None and (span.start, "unknown") not in self.reported:
                 self.reported.add((span.start, "unknown"))
@@ -174,7 +177,9 @@ class _Plan:
             return None
 
     def _witness(self, model, exprs: list[m.Expr], r: m.Rule) -> tuple[str, dict]:
+        """The inputs of `exprs` and of the earlier rules of the state where the model was found (so it replays)."""
         keys: dict[tuple, None] = {}
+        exprs = exprs + [x.guard for x in self.where[self.hit][1] if x.guard is not None]
         self.enc._used = {}
         for e in exprs:
             self._encode(e)
@@ -220,7 +225,7 @@ class _Plan:
             d = self.diags.add("W0525", x.span, f"`{x.op}` in rule `{r.label}` {what}", "overflow" if x.op not in ("/", "%") else "division by zero")
             d.with_note(f"witness: {text}")
             d.with_help("bound the operands (a declared range, a test in the condition), or use a wider type")
-            d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data}
+            d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data, "state": self.where[self.hit][0], "op": x.op}
 
     def _interval(self, e: m.Expr) -> tuple[int, int]:
         """Bounds of an integer expression from declared ranges, without wrapping."""
@@ -293,7 +298,7 @@ class _Plan:
             v = e.value
             if isinstance(v, (int, float)) and not isinstance(v, bool) and rng.lo <= v <= rng.hi:
                 return
-            model, text, data = None, f"the value is {format_value(v, t)}", {}
+            model, text, data, state = None, f"the value is {format_value(v, t)}", {}, None
         else:
             value = self._encode(e)
             if value is None or not (isinstance(value, F) or isinstance(t, IntType) or t == DURATION):
@@ -303,12 +308,15 @@ class _Plan:
                 return
             text, data = self._witness(model, [e] + ([r.guard] if r.guard is not None else []), r)
             text = "witness: " + text
+            state = self.where[self.hit][0]
         self.reported.add((e.span.start, "range"))
         lo, hi = format_value(rng.lo, t), format_value(rng.hi, t)
         d = self.diags.add("W0524", e.span, f"{what} can be outside its declared range {lo}..{hi}", "out of range")
         d.with_note(text)
         d.with_help("keep the value in the range (clamp it, or test it in the rule's condition), or widen the range")
-        d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data}
+        d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data, "range": [rng.lo, rng.hi]}
+        if state is not None:
+            d.data["state"] = state
 
     def _command(self, cmd: m.Command, contexts, r: m.Rule, assigned) -> None:
         sub = self.design.controllers.get(cmd.sub)
