@@ -166,6 +166,9 @@ class Stats:
     seconds: float = 0.0
 
 
+HELD_QUESTION = "the subordinates' held status along the plan's paths"
+
+
 class _Incomplete(Exception):
     def __init__(self, reason: str, question: str, span: Span | None) -> None:
         super().__init__(reason)
@@ -790,7 +793,7 @@ class _Analysis:
                         if not views or key in asked:
                             continue
                         asked.add(key)
-                        f = self.forever(s, rules, views)
+                        f = self._held_stall(s, rules, views, h)
                         if f is not None:
                             f.path = g.path(node)
                             f.held = {k: [ctx[h.subs.index(k[1])].kind, ctx[h.subs.index(k[1])].by] for k in views}
@@ -822,9 +825,9 @@ class _Analysis:
                 out.append(_Finding("W0542", [r.index], state=node[0], path=g.path(node), held={("view", view.sub): [p.kind, p.by]}))
             return out
         except hd.TooMany:
-            return [_Finding("W0518", [], reason="more paths than the held-status analysis follows", question="the subordinates' held status along the plan's paths", span=self.plan.name_span)]
+            return [_Finding("W0518", [], reason="more paths than the held-status analysis follows", question=HELD_QUESTION)]
         except hd.Unknown as exc:
-            return [_Finding("W0518", [], reason=exc.reason, question=exc.question, span=exc.span)]
+            return [_Finding("W0518", [], reason=exc.reason, question=f"{HELD_QUESTION} ({exc.question})")]
 
     def _live(self, r: m.Rule, s: str, live: dict) -> bool:
         if (r.index, s) in live:
@@ -835,6 +838,60 @@ class _Analysis:
         res = self.query(lits, f"whether `{r.label}` can fire in state `{s}`", r.label_span)
         live[(r.index, s)] = isinstance(res, _Sat)
         return live[(r.index, s)]
+
+    def _held_stall(self, s: str, rules: list[m.Rule], views: dict, h) -> _Finding | None:
+        """W0540 for one set of held views: a stall, asked cheaply where the views decide it.
+
+        For each combination of held values, the rules are simplified with
+        the views in place: when the rules left read no fixed input, the
+        state waits forever exactly when none of them can be true (one
+        ordinary question); otherwise the exists-forall question is asked.
+        """
+        import itertools
+
+        from rcsc.checks import held as hd
+
+        keys = list(views)
+        combos = list(itertools.product(*[sorted(views[k]) for k in keys]))
+        if len(combos) > 64:
+            return self.forever(s, rules, views)
+        for combo in combos:
+            remaining = []
+            certain = False
+            named = {k[1]: h.members[k[1]][v] for k, v in zip(keys, combo)}
+            for x in rules:
+                t = hd.truth(x.guard, named)
+                if t is True:
+                    certain = True  # this rule (or an earlier one) fires whatever the rest
+                    break
+                if t is None:
+                    remaining.append(x.index)
+            if certain:
+                continue
+            one = {k: {v} for k, v in zip(keys, combo)}
+            fixed = [k for i in remaining for k in self.encs[i].inputs if k[0] != "view" and _is_fixed(k, self.c, self.assigned)]
+            if remaining and not fixed:
+                pinned = {k[1]: v for k, v in zip(keys, combo)}
+                if any(all(vs[x] == v for x, v in pinned.items()) and any(vec.get(i) for i in remaining) for vec, vs in h.models):
+                    self.st.reused += 1
+                    continue
+                self.solver.push()
+                try:
+                    self.solver.add(z3.Or(*[self.p[i] for i in remaining]))
+                    for k, v in zip(keys, combo):
+                        self.solver.add(self.enc.inputs[k].term == v)
+                    self.st.queries += 1
+                    r = self.solver.check()
+                finally:
+                    self.solver.pop()
+                if r == z3.sat:
+                    continue  # some input fires a rule, and nothing fixed can keep it from doing so
+                if r != z3.unsat:
+                    raise _Incomplete(self.solver.reason_unknown() or "unknown", f"whether state `{s}` can wait forever with the subordinates' held status", rules[0].label_span)
+            f = self.forever(s, rules, one)
+            if f is not None:
+                return f
+        return None
 
     def _duration_cap(self, key: tuple) -> list:
         """A fixed duration without a declared range is at most the longest time in state.
@@ -1245,7 +1302,10 @@ def _report(design: Design, c: m.Controller, plan: m.Plan, f: _Finding, diags: D
         span = f.span or plan.name_span
         d = diags.add("W0518", span, f"guard analysis of {where} is incomplete", "not analysed")
         d.with_note(f"the solver could not decide {f.question}: {_reason_text(f.reason)}")
-        d.with_note("the rest of this plan's conditions were not analysed")
+        if f.question.startswith(HELD_QUESTION):
+            d.with_note("the held-status findings of this plan (W0540, W0541, W0542) were not computed")
+        else:
+            d.with_note("the rest of this plan's conditions were not analysed")
         d.with_help("simplify the condition, or move arithmetic into `pre` (a local the rule compares)")
         data["reason"] = f.reason
         d.data = data

@@ -107,15 +107,19 @@ class Held:
         self.subs = [k[1] for k in an.enc.inputs if k[0] == "view"]
         self.members = {s: an.enc.inputs[("view", s)].members for s in self.subs}
         self.view = {s: an.enc.inputs[("view", s)].term for s in self.subs}
-        self.lit: dict[tuple[str, int], z3.BoolRef] = {}
-        for s in self.subs:
-            for i in range(len(self.members[s])):
-                b = z3.Bool(f"held.{s}.{i}")
-                an.solver.add(b == (self.view[s] == i))
-                self.lit[(s, i)] = b
+        self.lit: dict[tuple[str, int], z3.BoolRef] = {}  # made when a question first pins a view
         self.fail: dict[tuple[str, str | None], bool] = {}
         self.models: list[tuple[dict, dict]] = []  # (rule vector, view values) of each model found
         self.memo: dict = {}
+        self.seen = 0  # how many of the guard analysis's models are in `models`
+
+    def literal(self, sub: str, i: int) -> z3.BoolRef:
+        """A Boolean that is `sub`'s view == member i (an assumption literal for the solver)."""
+        if (sub, i) not in self.lit:
+            b = z3.Bool(f"held.{sub}.{i}")
+            self.an.solver.add(b == (self.view[sub] == i))
+            self.lit[(sub, i)] = b
+        return self.lit[(sub, i)]
 
     # ---- phases ----
 
@@ -156,33 +160,39 @@ class Held:
 
     # ---- questions ----
 
-    def sat(self, lits: dict[int, bool], allowed: dict[str, frozenset[int]], what: str, span) -> bool:
+    def sat(self, lits: dict[int, bool], allowed: dict[str, frozenset[int]], what: str, span) -> dict | None:
+        """The subordinates' views of an input where `lits` hold and each view is allowed (None: there is none)."""
         key = (tuple(sorted(lits.items())), tuple(sorted(allowed.items())))
         if key in self.memo:
             return self.memo[key]
         an = self.an
+        # The guard analysis's own models first (their views read lazily), then this analysis's.
+        while self.seen < len(an.vectors):
+            v = an.vectors[self.seen]
+            self.seen += 1
+            self.models.append((v.vec, {s: v.model.eval(self.view[s], model_completion=True).as_long() for s in self.subs}))
         for vec, views in self.models:
             if all(vec[i] == b for i, b in lits.items()) and all(views[s] in vals for s, vals in allowed.items()):
                 an.st.reused += 1
-                self.memo[key] = True
-                return True
+                self.memo[key] = views
+                return views
         assumptions = an.lits(lits)
         for s, vals in allowed.items():
             for i in range(len(self.members[s])):
                 if i not in vals:
-                    assumptions.append(z3.Not(self.lit[(s, i)]))
+                    assumptions.append(z3.Not(self.literal(s, i)))
         an.st.queries += 1
         r = an.solver.check(*assumptions)
         if r == z3.unknown:
             raise Unknown(an.solver.reason_unknown() or "unknown", what, span)
-        ok = r == z3.sat
-        if ok:
+        found = None
+        if r == z3.sat:
             model = an.solver.model()
             vec = {i: z3.is_true(model.eval(p, model_completion=True)) for i, p in an.p.items()}
-            views = {s: model.eval(self.view[s], model_completion=True).as_long() for s in self.subs}
-            self.models.append((vec, views))
-        self.memo[key] = ok
-        return ok
+            found = {s: model.eval(self.view[s], model_completion=True).as_long() for s in self.subs}
+            self.models.append((vec, found))
+        self.memo[key] = found
+        return found
 
     # ---- the graph ----
 
@@ -233,37 +243,53 @@ class Held:
             yield other, {x.index: False for x in rules}
 
     def _fire(self, r: m.Rule, lits: dict[int, bool], state: str, ctx: tuple) -> list[tuple]:
-        """The contexts right after `r` fires in (state, ctx), before its jobs."""
+        """The context right after `r` fires in (state, ctx), before its jobs ([] if it cannot fire).
+
+        Whether it can fire is asked of the solver with the views of the
+        subordinates that hold a status (DONE, ERROR, none) pinned; a
+        subordinate still executing may show any status but `none` (and
+        `error` only when it can fail), which the solver is not asked about
+        beyond a condition that requires `SUB.error`.  What the rule's own
+        condition requires (`SUB.done and ...`) is then held; otherwise a
+        phase stays as it was, which allows more (never fewer) behaviours
+        afterwards.  A stale subordinate (not commanded by this plan) stays
+        `any`.
+        """
         an = self.an
-        allowed = {s: self.values(s, p.kind, p.verb) for s, p in zip(self.subs, ctx)}
-        what = f"whether `{r.label}` can fire in state `{state}` with the subordinates' held status"
-        if not self.sat(lits, allowed, what, r.label_span):
-            return []
         read = set()
         for i in lits:
-            read.update(k[1] for k in an.encs[i].inputs if k[0] == "view")
-        # Split the subordinates the conditions read by what the rule saw.
-        options: list[list[tuple[str, frozenset[int]]]] = []
+            if i in an.encs:
+                read.update(k[1] for k in an.encs[i].inputs if k[0] == "view")
+        pinned = {}
         for s, p in zip(self.subs, ctx):
-            if s not in read:
-                options.append([(p.kind, allowed[s])])
-                continue
-            groups: dict[str, set[int]] = {}
-            for i in sorted(allowed[s]):
-                groups.setdefault(self.cls(self.members[s], i), set()).add(i)
-            opts = [(k, frozenset(v)) for k, v in groups.items()]
-            if len(opts) > 1:
-                opts = [o for o in opts if self.sat(lits, {**allowed, s: o[1]}, what, r.label_span)]
-            options.append(opts)
-        combos: list[list[tuple[str, frozenset[int]]]] = [[]]
-        for opts in options:
-            combos = [c + [o] for c in combos for o in opts]
-        if len(combos) > 1:
-            combos = [c for c in combos if self.sat(lits, {s: o[1] for s, o in zip(self.subs, c)}, what, r.label_span)]
-        out = []
-        for c in combos:
-            out.append(tuple(Phase(kind, p.verb, p.by) for (kind, _), p in zip(c, ctx)))
-        return out
+            if s in read and p.kind in ("none", "done", "error"):
+                pinned[s] = self.values(s, p.kind, p.verb)
+        required = _required(r.guard)
+        for s, p in zip(self.subs, ctx):
+            if p.kind == "run" and required.get(s) == "error" and not self.can_fail(s, p.verb):
+                return []
+        # Conditions that the held views decide need no question.
+        named = {s: self.members[s][next(iter(v))] for s, v in pinned.items()}
+        ask = dict(lits)
+        for i, want in lits.items():
+            t = truth(an.plan.rules[i].guard, named)
+            if t is not None:
+                if t != want:
+                    return []
+                del ask[i]
+        still = set()
+        for i in ask:
+            if i in an.encs:
+                still.update(k[1] for k in an.encs[i].inputs if k[0] == "view")
+        pinned = {s: v for s, v in pinned.items() if s in still}
+        what = f"whether `{r.label}` can fire in state `{state}` with the subordinates' held status"
+        if ask and self.sat(ask, pinned, what, r.label_span) is None:
+            return []
+        out = list(ctx)
+        for j, (s, p) in enumerate(zip(self.subs, ctx)):
+            if p.kind == "run" and s in required:
+                out[j] = Phase(required[s], p.verb, p.by)
+        return [tuple(out)]
 
     def _jobs(self, r: m.Rule, ctx: tuple) -> list[tuple]:
         top, nested = commands(r)
@@ -323,3 +349,45 @@ class Held:
                     if ctx[self.subs.index(view.sub)].verb is None:
                         out[view.sub] = (view, r, node)
         return list(out.values())
+
+
+def _required(e: m.Expr | None) -> dict[str, str]:
+    """The subordinates whose class (done, error, run) a condition's top-level conjuncts require."""
+    out: dict[str, str] = {}
+    stack = [e] if e is not None else []
+    while stack:
+        x = stack.pop()
+        if isinstance(x, m.Binary) and x.op == "and":
+            stack += [x.left, x.right]
+        elif isinstance(x, m.SubView):
+            if x.attr in ("done", "error"):
+                out[x.sub] = x.attr
+            elif x.attr == "status" and x.value not in ("done", "error", "none"):
+                out[x.sub] = "run"
+    return out
+
+
+def truth(e: m.Expr | None, views: dict[str, str]):
+    """The value of a condition when the subordinates' views are `views` (sub -> member): True, False, or None (it depends on more)."""
+    if e is None:
+        return None
+    if isinstance(e, m.Const) and isinstance(e.value, bool):
+        return e.value
+    if isinstance(e, m.SubView) and e.sub in views and e.attr in ("done", "error", "executing", "status"):
+        v = views[e.sub]
+        if e.attr == "executing":
+            return v not in ("none", "done", "error")
+        return v == (e.value if e.attr == "status" else e.attr)
+    if isinstance(e, m.Unary) and e.op == "not":
+        t = truth(e.operand, views)
+        return None if t is None else not t
+    if isinstance(e, m.Binary) and e.op in ("and", "or"):
+        a, b = truth(e.left, views), truth(e.right, views)
+        if e.op == "and":
+            if a is False or b is False:
+                return False
+            return True if a is True and b is True else None
+        if a is True or b is True:
+            return True
+        return False if a is False and b is False else None
+    return None
