@@ -60,11 +60,16 @@ W0517 (warning) a state can wait forever
     (subordinates' status, sensors, time in state, extern results).  This is
     an exists-forall query.  Only the fixed inputs are the witness; the data
     also holds one full sample input.  Not reported for a `continuous` plan,
-    which holds its state until the next command by design.  (Why not treat
-    a subordinate's `done`/`error`/`none`, which do not change while nothing
-    is sent to it, as fixed too: whether a subordinate was commanded on the
-    way into the state is a path property; counting `none` as fixed would
-    report every state that waits for two subordinates.)
+    which holds its state until the next command by design.  A subordinate's
+    status is not fixed here: whether it was commanded on the way into the
+    state is a path property, which W0540 follows.
+W0540, W0541, W0542 (warnings) held subordinate status
+    `rcsc.checks.held` follows the plan's paths with each subordinate's
+    DONE/ERROR held until it is commanded again: W0540 is W0517 with the
+    held statuses among the fixed inputs (asked only where W0517 finds
+    nothing), W0541 a state from which only `error(...)` remains reachable
+    along the held statuses, W0542 a wait on a subordinate not commanded on a
+    path into the state.  Their witness is the path of rules from `new`.
 W0518 (warning) guard analysis incomplete
     The solver answered `unknown` or ran out of its budget (per query: a
     wall-clock timeout, `TIMEOUT_MS`, and a deterministic resource limit,
@@ -435,6 +440,7 @@ class _Analysis:
         for s in self.enc.side:
             self.solver.add(s)
         self.vectors: list[_Sat] = []
+        self.unsat: set[tuple] = set()  # the questions answered unsat (as sorted literals)
         # `done` and `error` as current states are E0510: never evaluated.
         self.states = [s for s in plan_states(plan) if s not in ("done", "error")]
         self.rules_in: dict[str, list[m.Rule]] = {}
@@ -466,6 +472,7 @@ class _Analysis:
             self.vectors.append(res)
             return res
         if r == z3.unsat:
+            self.unsat.add(tuple(sorted(lits.items())))
             ids = {a.get_id(): (i, b) for a, (i, b) in zip(assumptions, lits.items())}
             core = [ids[a.get_id()] for a in self.solver.unsat_core() if a.get_id() in ids]
             return _Unsat(core)
@@ -847,14 +854,24 @@ class _Analysis:
         state waits forever exactly when none of them can be true (one
         ordinary question); otherwise the exists-forall question is asked.
         """
-        import itertools
-
         from rcsc.checks import held as hd
 
         keys = list(views)
-        combos = list(itertools.product(*[sorted(views[k]) for k in keys]))
-        if len(combos) > 64:
-            return self.forever(s, rules, views)
+        # The combinations of held values, without those in which a rule
+        # certainly fires (decided on the partial combination already).
+        combos: list[tuple] = []
+        stack: list[tuple] = [()]
+        while stack:
+            part = stack.pop()
+            named = {k[1]: h.members[k[1]][v] for k, v in zip(keys, part)}
+            if any(hd.truth(x.guard, named) is True for x in rules):
+                continue
+            if len(part) == len(keys):
+                combos.append(part)
+                if len(combos) > 64:
+                    return self.forever(s, rules, views)
+                continue
+            stack.extend(part + (v,) for v in sorted(views[keys[len(part)]], reverse=True))
         for combo in combos:
             remaining = []
             certain = False

@@ -166,6 +166,9 @@ class Held:
         if key in self.memo:
             return self.memo[key]
         an = self.an
+        if not allowed and key[0] in an.unsat:  # the guard analysis asked this already
+            an.st.reused += 1
+            return None
         # The guard analysis's own models first (their views read lazily), then this analysis's.
         while self.seen < len(an.vectors):
             v = an.vectors[self.seen]
