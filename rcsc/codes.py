@@ -551,10 +551,11 @@ Wrong:
     P2: H.done and V.AT_LEVEL           | HEAT -> done;        // V holds DONE here
     P3: H.done and not V.AT_LEVEL       | HEAT -> FILL | V.OPEN();
 
-Fixed:
+Fixed (the level is read from its sensor, not from a status the valve no
+longer reports):
 
-    P1: V.AT_LEVEL                      | FILL -> HEAT | H.ON();
-    P2: H.done                          | HEAT -> done;
+    P2: H.done and level >= 90.0        | HEAT -> done;
+    P3: H.done and level < 90.0         | HEAT -> FILL | V.OPEN();
 """),
     ("W0542", _W, "wait on a subordinate not commanded on every way into the state", """
 A rule of the state tests `SUB.done` (or `SUB.executing`, or an extra status),

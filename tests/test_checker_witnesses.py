@@ -67,3 +67,42 @@ def test_stale_wait_witnesses() -> None:
     assert found[22]["path"] == ["F1"] and found[22]["commanded_by"] == {"ARM": None}
     assert found[27]["path"] == ["P0"]
     assert found[34]["path"] == ["S0", "S1"] and found[34]["state"] == "S2"
+
+
+def test_held_status_explanations_fixed_examples_are_clean(tmp_path: Path) -> None:
+    """The fixed forms that `rcsc explain W0541` / `W0542` teach check clean in a whole design."""
+    tank = """design d
+gm level: f64 = 0.0 from env
+controller TOP level 2 budget 1 ms {
+    subordinates V, H
+    reads level
+    verb TANK
+    plan TANK {
+        P0: true                      | new  -> FILL | V.OPEN();
+        P9: V.error or H.error        | *    -> error(1);
+        P1: V.done                    | FILL -> HEAT | H.ON();
+        P2: H.done and level >= 90.0  | HEAT -> done;
+        P3: H.done and level < 90.0   | HEAT -> FILL | V.OPEN();
+    }
+}
+controller V level 1 budget 1 ms {
+    reports AT_LEVEL
+    verb OPEN
+    plan OPEN { O0: true | new -> S1 | report AT_LEVEL; O1: in_state >= 50 ms | S1 -> error(2); O2: otherwise | S1 -> done; }
+}
+controller H level 1 budget 1 ms {
+    verb ON
+    plan ON { N0: true | new -> S1; N1: in_state >= 50 ms | S1 -> error(2); N2: otherwise | S1 -> done; }
+}
+cpu main {
+    heartbeat 10 ms
+    schedule TOP, V, H
+}
+"""
+    path = tmp_path / "tank.rcs"
+    path.write_text(tank, encoding="utf-8")
+    assert [d.code for d in check_path(str(path)).diags] == []
+    # The wrong form of the same table: P2 waits for a status V no longer reports.
+    wrong = tank.replace("H.done and level >= 90.0 ", "H.done and V.AT_LEVEL    ").replace("H.done and level < 90.0 ", "H.done and not V.AT_LEVEL")
+    path.write_text(wrong, encoding="utf-8")
+    assert [d.code for d in check_path(str(path)).diags] == ["W0541"]
