@@ -106,3 +106,11 @@ cpu main {
     wrong = tank.replace("H.done and level >= 90.0 ", "H.done and V.AT_LEVEL    ").replace("H.done and level < 90.0 ", "H.done and not V.AT_LEVEL")
     path.write_text(wrong, encoding="utf-8")
     assert [d.code for d in check_path(str(path)).diags] == ["W0541"]
+
+
+def test_record_field_range_witnesses() -> None:
+    found = _by_line("W0524_record_fields.rcs", "W0524")
+    assert sorted(found) == [27, 28, 29]
+    assert found[27]["witness"]["cmd.x"] not in range(0, 11) and found[27]["range"] == [0, 10]
+    assert found[28]["witness"] == {}  # the constant 4000.0: no input needed
+    assert not 0.0 <= found[29]["witness"]["cmd.r"] * 2.0 <= 3000.0

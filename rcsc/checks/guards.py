@@ -1216,7 +1216,7 @@ def _stored_key(design: Design, c: m.Controller, plan: m.Plan, canon: _Canon, op
 
     types = (
         tuple((n, tuple(t.members)) for n, t in sorted(design.enums.items())),
-        tuple((n, tuple((fn, str(ft)) for fn, ft in t.fields)) for n, t in sorted(design.records.items())),
+        tuple((n, tuple((fn, str(ft), _range_key(t.field_range(fn))) for fn, ft in t.fields)) for n, t in sorted(design.records.items())),
     )
     fns = tuple(
         (
@@ -1245,6 +1245,10 @@ def _stored_key(design: Design, c: m.Controller, plan: m.Plan, canon: _Canon, op
             fns,
         )
     )
+
+
+def _range_key(rng) -> tuple | None:
+    return None if rng is None else (_vkey(rng.lo), _vkey(rng.hi))
 
 
 def _load(store, key: str, design: Design) -> list[_Finding] | None:

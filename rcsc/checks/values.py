@@ -35,7 +35,7 @@ from rcsc.checks.plans import plan_states, rule_sources
 from rcsc.diagnostics import Diagnostics
 from rcsc.semantics.model import Design
 from rcsc.checks.smt import F, Encoder, HasTypeError, Unsupported, concrete, format_value, real_of
-from rcsc.semantics.types import DURATION, FloatType, IntType, Type
+from rcsc.semantics.types import DURATION, FloatType, IntType, RecordType, Type
 
 TIMEOUT_MS = 2000
 RLIMIT = 1_000_000
@@ -129,6 +129,9 @@ class _Plan:
                     self._command(job, fired, r, assigned)
                 elif isinstance(job, m.Assign):
                     self._assign(job, fired, r, assigned)
+                for e in m.stmt_exprs(job):
+                    if not _reads(e) & assigned:
+                        self._records(e, fired, r, assigned)
                 assigned |= _assigned_names(job)
 
     # ---- questions ----
@@ -318,6 +321,22 @@ class _Plan:
         if state is not None:
             d.data["state"] = state
 
+    def _assign_field(self, job: m.Assign, contexts, r: m.Rule, assigned) -> None:
+        """`var.field = value` into a ranged record field."""
+        t = job.target
+        var = {"gm": self.design.gm, "local": self.c.locals, "status": self.c.status_fields}.get(t.kind, {}).get(t.name)
+        if var is None or job.op != "=":
+            return
+        slot = _field_slot(var.type, list(t.path))
+        if slot is None:
+            return
+        rec, fname = slot
+        rng = rec.field_range(fname)
+        ftype = rec.field_type(fname)
+        if rng is None or ftype is None:
+            return
+        self._slot(job.value, rng, ftype, "`" + ".".join([t.name] + list(t.path)) + "`", contexts, r, assigned)
+
     def _command(self, cmd: m.Command, contexts, r: m.Rule, assigned) -> None:
         sub = self.design.controllers.get(cmd.sub)
         verb = sub.verbs.get(cmd.verb) if sub else None
@@ -326,8 +345,16 @@ class _Plan:
         for p, arg in zip(verb.params, cmd.args):
             self._slot(arg, p.range, p.type, f"argument `{p.name}` of `{cmd.sub}.{cmd.verb}`", contexts, r, assigned)
 
+    def _records(self, e: m.Expr, contexts, r: m.Rule, assigned) -> None:
+        """Each argument of a record built in `e` (`Spec(rpm = x)`) that goes into a ranged field."""
+        for x in m.walk_expr(e):
+            if isinstance(x, m.Call) and x.kind == "record" and isinstance(x.type, RecordType):
+                for (fname, ftype), arg in zip(x.type.fields, x.args):
+                    self._slot(arg, x.type.field_range(fname), ftype, f"field `{fname}` of `{x.type.name}`", contexts, r, assigned)
+
     def _assign(self, job: m.Assign, contexts, r: m.Rule, assigned) -> None:
         if job.target.path:
+            self._assign_field(job, contexts, r, assigned)
             return
         t = job.target
         var = {"gm": self.design.gm, "local": self.c.locals, "status": self.c.status_fields}.get(t.kind, {}).get(t.name)
@@ -338,3 +365,14 @@ class _Plan:
             # ran before: history, which the analysis does not follow.
             return
         self._slot(job.value, var.range, var.type, f"`{t.name}`", contexts, r, assigned)
+
+
+def _field_slot(t: Type, path) -> tuple[RecordType, str] | None:
+    """The record type and field name that an assignment to `var.a.b` writes."""
+    for p in path[:-1]:
+        if not isinstance(t, RecordType):
+            return None
+        t = t.field_type(p)  # type: ignore[assignment]
+    if not isinstance(t, RecordType) or not path:
+        return None
+    return t, path[-1]
