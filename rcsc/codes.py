@@ -441,7 +441,9 @@ Fixed:
     ("W0524", _W, "value can be outside its declared range", """
 A job list puts a value into a ranged slot - an argument for a parameter
 declared `x: i32 in 0..10`, an assignment to a ranged local, status field or
-Global Memory variable - and for the inputs shown as witness (with the rule's
+Global Memory variable, a field of a record whose declaration gives it a range
+(`record Spec { n: i32 in 0..10 }`, filled by `Spec(n = ...)` or `spec.n = ...`)
+- and for the inputs shown as witness (with the rule's
 condition true and the earlier rules of its state false) the value is outside
 the range. The checks of the receiving plan assume the range (a command with
 x = 20 can leave every rule of `new` false, and the plan sits there for ever),
