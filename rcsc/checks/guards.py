@@ -1047,8 +1047,9 @@ def _uninterpreted_apps(terms) -> list:
 class _Canon:
     """A canonical text of a plan's analysis problem, with its inputs numbered in order of use."""
 
-    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, period, nan: bool = True) -> None:
+    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, period, nan: bool = True, fails: dict | None = None) -> None:
         self.design, self.c = design, c
+        self.fails = {} if fails is None else fails  # (sub, verb) -> can it fail (shared by a run)
         self.keys: dict[tuple, int] = {}
         self.parts: list = [plan.ordered, period, nan]
         verb = c.verbs.get(plan.verb)
@@ -1075,12 +1076,18 @@ class _Canon:
         from rcsc.checks.held import commands
         from rcsc.checks.plans import failure_of
 
+        if not r.jobs:
+            return ()
         top, nested = commands(r)
-        return tuple(
-            (self.key_of(("view", cmd.sub)), cmd in nested, failure_of(self.design, cmd.sub, cmd.verb) is not None)
-            for cmd in top + nested
-            if cmd.sub in self.design.controllers
-        )
+        out = []
+        for cmd in top + nested:
+            if cmd.sub not in self.design.controllers:
+                continue
+            key = (cmd.sub, cmd.verb)
+            if key not in self.fails:
+                self.fails[key] = failure_of(self.design, cmd.sub, cmd.verb) is not None
+            out.append((self.key_of(("view", cmd.sub)), cmd in nested, self.fails[key]))
+        return tuple(out)
 
     def key_of(self, key: tuple) -> int:
         if key not in self.keys:
@@ -1164,7 +1171,7 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
         # Ages count base ticks: a design whose base tick differs from this
         # controller's period analyses the same plan differently.
         unit = period if design.base_tick_ns in (0, period) else (period, design.base_tick_ns)
-        canon = _Canon(design, c, plan, assigned, unit, nan)
+        canon = _Canon(design, c, plan, assigned, unit, nan, cache.setdefault("can-fail", {}))
         ckey = canon.key()
         hit = cache.get(ckey)
         if hit is not None:
