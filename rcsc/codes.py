@@ -441,7 +441,9 @@ Fixed:
     ("W0524", _W, "value can be outside its declared range", """
 A job list puts a value into a ranged slot - an argument for a parameter
 declared `x: i32 in 0..10`, an assignment to a ranged local, status field or
-Global Memory variable - and for the inputs shown as witness (with the rule's
+Global Memory variable, a field of a record whose declaration gives it a range
+(`record Spec { n: i32 in 0..10 }`, filled by `Spec(n = ...)` or `spec.n = ...`)
+- and for the inputs shown as witness (with the rule's
 condition true and the earlier rules of its state false) the value is outside
 the range. The checks of the receiving plan assume the range (a command with
 x = 20 can leave every rule of `new` false, and the plan sits there for ever),
@@ -510,6 +512,71 @@ Fixed:
 
     E2: AX.done and n >= 3 | WAIT -> done;
     E3: AX.done and n < 3  | WAIT -> MOVE | AX.GO(), n += 1;
+"""),
+    ("W0540", _W, "state can wait forever on a subordinate's held status", """
+A subordinate's status answers the last command it was sent and holds until it
+is commanded again: EXEC while it works, then DONE or ERROR (ERROR only when it
+can fail for that verb). Along the path shown (the rules from `new`), the
+subordinates this state reads hold a status for which no rule of the state can
+fire, whatever the inputs that still change: the plan waits forever. Typical
+causes: a state that waits for a new status of a subordinate nobody commanded
+again (the `*` error rule seems to cover it, but a subordinate that holds DONE
+never reports ERROR), or a state that waits for a subordinate never commanded
+on the way in. The witness gives the statuses held and the fixed inputs;
+W0517 is the same finding when no subordinate's status is needed for it.
+
+Wrong:
+
+    L0: true       | new  -> MOVE | ARM.GO();
+    L9: ARM.error  | *    -> error(2);
+    L1: ARM.done   | MOVE -> LIFT;              // ARM holds DONE from here on
+    L2: ARM.AT_TOP | LIFT -> done;              // never: ARM is not commanded again
+
+Fixed:
+
+    L1: ARM.done   | MOVE -> LIFT | ARM.LIFT();
+    L2: ARM.AT_TOP or ARM.done | LIFT -> done;
+"""),
+    ("W0541", _W, "`done` unreachable with the subordinates' held status", """
+The state graph has a way from this state to `done`, but along the path shown
+(the rules from `new`) the rules on that way need a status that the
+subordinates cannot report: they hold DONE or ERROR until commanded again, and
+nothing commands them. What remains are the `error(...)` exits (usually `*`
+fault rules): once there, the command can only fail. W0526 is the same finding
+when no way to `done` exists at all.
+
+Wrong:
+
+    P0: true                            | new  -> FILL | V.OPEN();
+    P9: V.error or H.error              | *    -> error(1);
+    P1: V.done                          | FILL -> HEAT | H.ON();
+    P2: H.done and V.AT_LEVEL           | HEAT -> done;        // V holds DONE here
+    P3: H.done and not V.AT_LEVEL       | HEAT -> FILL | V.OPEN();
+
+Fixed (the level is read from its sensor, not from a status the valve no
+longer reports):
+
+    P2: H.done and level >= 90.0        | HEAT -> done;
+    P3: H.done and level < 90.0         | HEAT -> FILL | V.OPEN();
+"""),
+    ("W0542", _W, "wait on a subordinate not commanded on every way into the state", """
+A rule of the state tests `SUB.done` (or `SUB.executing`, or an extra status),
+and on the path shown (the rules from `new`) this plan has not commanded SUB:
+its status still answers an earlier command, from another plan or an earlier
+run of this one, or none at all. The wait ends at once on a stale DONE, or
+never. The plan commands SUB elsewhere (W0522 is the plan that never does);
+usually one way into the state forgot the command.
+
+Wrong:
+
+    E0: cmd.fast     | new -> S1 | ARM.GO();
+    E1: not cmd.fast | new -> S1;               // no command on this way in
+    E9: ARM.error    | *   -> error(2);
+    E2: ARM.done     | S1  -> done;
+
+Fixed:
+
+    E1: not cmd.fast | new -> S1 | ARM.GO_SLOW();
 """),
     # ---- guards (z3): determinism and coverage of state tables ------------------
     ("E0513", _E, "condition is never true", """

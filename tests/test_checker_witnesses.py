@@ -43,3 +43,74 @@ def test_nan_reaches_a_parameter_only_through_a_supervisor() -> None:
 def test_a_duration_parameter_is_not_a_wait_for_ever() -> None:
     result = check_path(str(CASES / "ok_duration_waits.rcs"))
     assert [d.code for d in result.diags] == []
+
+
+def test_held_stall_witnesses() -> None:
+    found = _by_line("W0540_held_stall.rcs", "W0540")
+    assert sorted(found) == [24, 30, 35]
+    assert found[24]["witness"] == {"ARM": "done"} and found[24]["path"] == ["L0", "L1"]
+    assert found[24]["held"] == {"ARM": "done"} and found[24]["commanded_by"] == {"ARM": "L0"}
+    assert found[30]["witness"] == {"ARM": "done"} and found[30]["state"] == "BACK"
+    # Behind the `*` error rule: ARM still runs on entry, settles DONE, and a zero count stalls.
+    assert found[35]["witness"] == {"ARM": "done", "cmd.n": 0} and found[35]["held"] == {"ARM": "run"}
+    assert all(d["replayed"] is True for d in found.values())
+
+
+def test_done_unreachable_witnesses() -> None:
+    found = _by_line("W0541_done_unreachable.rcs", "W0541")
+    assert found[21]["path"] == ["P0", "P1"] and found[21]["held"] == {"V": "done"} and found[21]["rules"] == ["P2"]
+    assert found[29]["path"] == ["C0", "C1"] and found[29]["held"] == {"AX": "done"} and found[29]["rules"] == ["C3"]
+
+
+def test_stale_wait_witnesses() -> None:
+    found = _by_line("W0542_stale_wait.rcs", "W0542")
+    assert found[22]["path"] == ["F1"] and found[22]["commanded_by"] == {"ARM": None}
+    assert found[27]["path"] == ["P0"]
+    assert found[34]["path"] == ["S0", "S1"] and found[34]["state"] == "S2"
+
+
+def test_held_status_explanations_fixed_examples_are_clean(tmp_path: Path) -> None:
+    """The fixed forms that `rcsc explain W0541` / `W0542` teach check clean in a whole design."""
+    tank = """design d
+gm level: f64 = 0.0 from env
+controller TOP level 2 budget 1 ms {
+    subordinates V, H
+    reads level
+    verb TANK
+    plan TANK {
+        P0: true                      | new  -> FILL | V.OPEN();
+        P9: V.error or H.error        | *    -> error(1);
+        P1: V.done                    | FILL -> HEAT | H.ON();
+        P2: H.done and level >= 90.0  | HEAT -> done;
+        P3: H.done and level < 90.0   | HEAT -> FILL | V.OPEN();
+    }
+}
+controller V level 1 budget 1 ms {
+    reports AT_LEVEL
+    verb OPEN
+    plan OPEN { O0: true | new -> S1 | report AT_LEVEL; O1: in_state >= 50 ms | S1 -> error(2); O2: otherwise | S1 -> done; }
+}
+controller H level 1 budget 1 ms {
+    verb ON
+    plan ON { N0: true | new -> S1; N1: in_state >= 50 ms | S1 -> error(2); N2: otherwise | S1 -> done; }
+}
+cpu main {
+    heartbeat 10 ms
+    schedule TOP, V, H
+}
+"""
+    path = tmp_path / "tank.rcs"
+    path.write_text(tank, encoding="utf-8")
+    assert [d.code for d in check_path(str(path)).diags] == []
+    # The wrong form of the same table: P2 waits for a status V no longer reports.
+    wrong = tank.replace("H.done and level >= 90.0 ", "H.done and V.AT_LEVEL    ").replace("H.done and level < 90.0 ", "H.done and not V.AT_LEVEL")
+    path.write_text(wrong, encoding="utf-8")
+    assert [d.code for d in check_path(str(path)).diags] == ["W0541"]
+
+
+def test_record_field_range_witnesses() -> None:
+    found = _by_line("W0524_record_fields.rcs", "W0524")
+    assert sorted(found) == [27, 28, 29]
+    assert found[27]["witness"]["cmd.x"] not in range(0, 11) and found[27]["range"] == [0, 10]
+    assert found[28]["witness"] == {}  # the constant 4000.0: no input needed
+    assert not 0.0 <= found[29]["witness"]["cmd.r"] * 2.0 <= 3000.0

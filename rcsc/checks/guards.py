@@ -60,11 +60,16 @@ W0517 (warning) a state can wait forever
     (subordinates' status, sensors, time in state, extern results).  This is
     an exists-forall query.  Only the fixed inputs are the witness; the data
     also holds one full sample input.  Not reported for a `continuous` plan,
-    which holds its state until the next command by design.  (Why not treat
-    a subordinate's `done`/`error`/`none`, which do not change while nothing
-    is sent to it, as fixed too: whether a subordinate was commanded on the
-    way into the state is a path property; counting `none` as fixed would
-    report every state that waits for two subordinates.)
+    which holds its state until the next command by design.  A subordinate's
+    status is not fixed here: whether it was commanded on the way into the
+    state is a path property, which W0540 follows.
+W0540, W0541, W0542 (warnings) held subordinate status
+    `rcsc.checks.held` follows the plan's paths with each subordinate's
+    DONE/ERROR held until it is commanded again: W0540 is W0517 with the
+    held statuses among the fixed inputs (asked only where W0517 finds
+    nothing), W0541 a state from which only `error(...)` remains reachable
+    along the held statuses, W0542 a wait on a subordinate not commanded on a
+    path into the state.  Their witness is the path of rules from `new`.
 W0518 (warning) guard analysis incomplete
     The solver answered `unknown` or ran out of its budget (per query: a
     wall-clock timeout, `TIMEOUT_MS`, and a deterministic resource limit,
@@ -164,6 +169,9 @@ class Stats:
     reused: int = 0  # questions answered by an earlier model
     forall_queries: int = 0
     seconds: float = 0.0
+
+
+HELD_QUESTION = "the subordinates' held status along the plan's paths"
 
 
 class _Incomplete(Exception):
@@ -388,6 +396,8 @@ class _Finding:
     reason: str = ""
     question: str = ""
     approx: list[str] = field(default_factory=list)
+    path: list[int] = field(default_factory=list)  # rule indexes from `new` (held-status findings)
+    held: dict = field(default_factory=dict)  # ("view", sub) -> [phase, index of the rule that last commanded it or -1]
     span: Span | None = None
 
 
@@ -430,6 +440,7 @@ class _Analysis:
         for s in self.enc.side:
             self.solver.add(s)
         self.vectors: list[_Sat] = []
+        self.unsat: set[tuple] = set()  # the questions answered unsat (as sorted literals)
         # `done` and `error` as current states are E0510: never evaluated.
         self.states = [s for s in plan_states(plan) if s not in ("done", "error")]
         self.rules_in: dict[str, list[m.Rule]] = {}
@@ -461,6 +472,7 @@ class _Analysis:
             self.vectors.append(res)
             return res
         if r == z3.unsat:
+            self.unsat.add(tuple(sorted(lits.items())))
             ids = {a.get_id(): (i, b) for a, (i, b) in zip(assumptions, lits.items())}
             core = [ids[a.get_id()] for a in self.solver.unsat_core() if a.get_id() in ids]
             return _Unsat(core)
@@ -737,7 +749,92 @@ class _Analysis:
                             upto = [x.index for x in self.rules_in[s] if x.index <= rj.index]
                             w, ex, _ = self.witness(res.model, upto, self.lits(lits))
                             out.append(_Finding("W0515", [rj.index, ri.index], state=s, witness=w, externs=ex, fires=ri.index, approx=self.approx(upto)))
+        out.extend(self.held(out))
         return out
+
+    # ---- held subordinate status (rcsc.checks.held) ----
+
+    def held(self, found: list[_Finding]) -> list[_Finding]:
+        """W0540, W0541 and W0542: the plan's paths with each subordinate's status held until it is commanded again."""
+        from rcsc.checks import held as hd
+
+        if not any(k[0] == "view" for k in self.enc.inputs):
+            return []
+        h = hd.Held(self)
+        try:
+            g = h.build()
+            out: list[_Finding] = []
+            by_state: dict[str, list] = {}
+            for node in g.order:
+                by_state.setdefault(node[0], []).append(node)
+            # W0540: stalls on a held status, where W0517 finds none.
+            stalled = {f.state for f in found if f.code == "W0517"}
+            if not self.plan.continuous:
+                for s in self.states:
+                    rules = self.rules_in[s]
+                    if s == "new" or s in stalled or s in self.otherwise or s not in by_state:
+                        continue
+                    if not any(x.state.kind == "named" for x in rules):
+                        continue  # only `*` rules: a misspelt next state (E0502), not a wait
+                    read = [k for k in self.inputs_of([x.index for x in rules]) if k[0] == "view"]
+                    if not read:
+                        continue
+                    # A subordinate's ERROR that the state never tests is E0505's finding.
+                    tests_error = {
+                        x.sub for x in self.rules_in[s] for x in m.walk_expr(x.guard) if isinstance(x, m.SubView) and x.attr in ("error", "error_code")  # type: ignore[arg-type]
+                    }
+                    asked: set = set()
+                    for node in by_state[s]:
+                        ctx = node[1]
+                        views = {}
+                        for k in read:
+                            p = ctx[h.subs.index(k[1])]
+                            if p.verb is None:
+                                continue  # a stale status: W0542's finding, varying here
+                            vals = h.settled(k[1], p)
+                            if vals is not None and k[1] not in tests_error:
+                                vals = vals - {h.members[k[1]].index("error")}
+                            if vals:
+                                views[k] = vals
+                        key = tuple(sorted(views.items()))
+                        if not views or key in asked:
+                            continue
+                        asked.add(key)
+                        f = self._held_stall(s, rules, views, h)
+                        if f is not None:
+                            f.path = g.path(node)
+                            f.held = {k: [ctx[h.subs.index(k[1])].kind, ctx[h.subs.index(k[1])].by] for k in views}
+                            out.append(f)
+                            break
+            # W0541: `done` unreachable along the held statuses.
+            if not self.plan.continuous:
+                import networkx as nx
+
+                from rcsc.checks.plans import DONE as _DONE
+                from rcsc.checks.plans import state_graph
+
+                done_states = nx.ancestors(state_graph(self.plan), _DONE)
+                trapped = h.trapped(g, done_states)
+                # Shown where a rule to `done` is written but cannot fire (else the first such node).
+                exits = {
+                    n: [x.index for x in self.rules_in.get(n[0], []) + ([self.otherwise[n[0]]] if n[0] in self.otherwise else []) if x.next.kind == "done"]
+                    for n in trapped
+                }
+                node = next((n for n in trapped if exits[n]), trapped[0] if trapped else None)
+                if node is not None:
+                    state, ctx = node
+                    held = {("view", sub): [p.kind, p.by] for sub, p in zip(h.subs, ctx) if p.kind in ("none", "done", "error")}
+                    out.append(_Finding("W0541", exits[node], state=state, path=g.path(node), held=held))
+            # W0542: a wait on a subordinate not commanded on a path into the state.
+            commanded = {cmd.sub for r in self.plan.rules for cmd in m.walk_stmts(r.jobs) if isinstance(cmd, m.Command)}
+            for view, r, node in h.stale_waits(g, commanded):
+                p = node[1][h.subs.index(view.sub)]
+                out.append(_Finding("W0542", [r.index], state=node[0], path=g.path(node), held={("view", view.sub): [p.kind, p.by]}))
+            return out
+        except hd.TooMany:
+            return [_Finding("W0518", [], reason="more paths than the held-status analysis follows", question=HELD_QUESTION)]
+        except hd.Unknown as exc:
+            return [_Finding("W0518", [], reason=exc.reason, question=f"{HELD_QUESTION} ({exc.question})")]
 
     def _live(self, r: m.Rule, s: str, live: dict) -> bool:
         if (r.index, s) in live:
@@ -748,6 +845,70 @@ class _Analysis:
         res = self.query(lits, f"whether `{r.label}` can fire in state `{s}`", r.label_span)
         live[(r.index, s)] = isinstance(res, _Sat)
         return live[(r.index, s)]
+
+    def _held_stall(self, s: str, rules: list[m.Rule], views: dict, h) -> _Finding | None:
+        """W0540 for one set of held views: a stall, asked cheaply where the views decide it.
+
+        For each combination of held values, the rules are simplified with
+        the views in place: when the rules left read no fixed input, the
+        state waits forever exactly when none of them can be true (one
+        ordinary question); otherwise the exists-forall question is asked.
+        """
+        from rcsc.checks import held as hd
+
+        keys = list(views)
+        # The combinations of held values, without those in which a rule
+        # certainly fires (decided on the partial combination already).
+        combos: list[tuple] = []
+        stack: list[tuple] = [()]
+        while stack:
+            part = stack.pop()
+            named = {k[1]: h.members[k[1]][v] for k, v in zip(keys, part)}
+            if any(hd.truth(x.guard, named) is True for x in rules):
+                continue
+            if len(part) == len(keys):
+                combos.append(part)
+                if len(combos) > 64:
+                    return self.forever(s, rules, views)
+                continue
+            stack.extend(part + (v,) for v in sorted(views[keys[len(part)]], reverse=True))
+        for combo in combos:
+            remaining = []
+            certain = False
+            named = {k[1]: h.members[k[1]][v] for k, v in zip(keys, combo)}
+            for x in rules:
+                t = hd.truth(x.guard, named)
+                if t is True:
+                    certain = True  # this rule (or an earlier one) fires whatever the rest
+                    break
+                if t is None:
+                    remaining.append(x.index)
+            if certain:
+                continue
+            one = {k: {v} for k, v in zip(keys, combo)}
+            fixed = [k for i in remaining for k in self.encs[i].inputs if k[0] != "view" and _is_fixed(k, self.c, self.assigned)]
+            if remaining and not fixed:
+                pinned = {k[1]: v for k, v in zip(keys, combo)}
+                if any(all(vs[x] == v for x, v in pinned.items()) and any(vec.get(i) for i in remaining) for vec, vs in h.models):
+                    self.st.reused += 1
+                    continue
+                self.solver.push()
+                try:
+                    self.solver.add(z3.Or(*[self.p[i] for i in remaining]))
+                    for k, v in zip(keys, combo):
+                        self.solver.add(self.enc.inputs[k].term == v)
+                    self.st.queries += 1
+                    r = self.solver.check()
+                finally:
+                    self.solver.pop()
+                if r == z3.sat:
+                    continue  # some input fires a rule, and nothing fixed can keep it from doing so
+                if r != z3.unsat:
+                    raise _Incomplete(self.solver.reason_unknown() or "unknown", f"whether state `{s}` can wait forever with the subordinates' held status", rules[0].label_span)
+            f = self.forever(s, rules, one)
+            if f is not None:
+                return f
+        return None
 
     def _duration_cap(self, key: tuple) -> list:
         """A fixed duration without a declared range is at most the longest time in state.
@@ -766,11 +927,16 @@ class _Analysis:
         period = self.period or 1
         return [inp.term <= (2**63 - 1) // period * period]
 
-    def forever(self, s: str, rules: list[m.Rule]) -> _Finding | None:
-        """Exists fixed inputs such that for all other inputs no rule of `s` fires."""
+    def forever(self, s: str, rules: list[m.Rule], views: dict | None = None) -> _Finding | None:
+        """Exists fixed inputs such that for all other inputs no rule of `s` fires.
+
+        `views` (W0540): subordinates' views that are fixed too, each to one
+        of a set of values (member indexes): the statuses they hold.
+        """
         idxs = [x.index for x in rules]
         keys = self.inputs_of(idxs)
-        fixed = [k for k in keys if _is_fixed(k, self.c, self.assigned)]
+        views = views or {}
+        fixed = [k for k in keys if _is_fixed(k, self.c, self.assigned) or k in views]
         if not fixed:
             return None  # then only conditions that are never true can stall it (E0513)
         varying = [k for k in keys if k not in fixed]
@@ -794,6 +960,8 @@ class _Analysis:
             for k in fixed:
                 solver.add(self.enc.inputs[k].constraint)
                 solver.add(*self._duration_cap(k))
+                if k in views:
+                    solver.add(z3.Or(*[self.enc.inputs[k].term == i for i in sorted(views[k])]))
             solver.add(formula)
             self.st.queries += 1
             self.st.forall_queries += 1
@@ -801,12 +969,13 @@ class _Analysis:
             if r == z3.unsat:
                 return None
             if r != z3.sat:
-                raise _Incomplete(solver.reason_unknown() or "unknown", f"whether state `{s}` can wait forever", rules[0].label_span)
+                what = "with the subordinates' held status" if views else ""
+                raise _Incomplete(solver.reason_unknown() or "unknown", f"whether state `{s}` can wait forever{what}", rules[0].label_span)
             model = self.polish(solver, [], fixed, solver.model())
         finally:
             del solver
         values = {k: concrete(model, self.enc.inputs[k].term, self.enc.inputs[k].type, self.enc.inputs[k].members) for k in fixed}
-        f = _Finding("W0517", idxs, state=s, witness=values, fires=-1, approx=self.approx(idxs))
+        f = _Finding("W0540" if views else "W0517", idxs, state=s, witness=values, fires=-1, approx=self.approx(idxs))
         # One full input of that kind, for the replay.
         self.solver.push()
         try:
@@ -878,8 +1047,9 @@ def _uninterpreted_apps(terms) -> list:
 class _Canon:
     """A canonical text of a plan's analysis problem, with its inputs numbered in order of use."""
 
-    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, period, nan: bool = True) -> None:
+    def __init__(self, design: Design, c: m.Controller, plan: m.Plan, assigned, period, nan: bool = True, fails: dict | None = None) -> None:
         self.design, self.c = design, c
+        self.fails = {} if fails is None else fails  # (sub, verb) -> can it fail (shared by a run)
         self.keys: dict[tuple, int] = {}
         self.parts: list = [plan.ordered, period, nan]
         verb = c.verbs.get(plan.verb)
@@ -899,7 +1069,25 @@ class _Canon:
             jk = _skey(r.jobs)
             jobs.setdefault(jk, len(jobs))
             st = states.get(r.state.name or "", "") if r.state.kind == "named" else r.state.kind
-            self.parts.append(("rule", st, ntext, jobs[jk], None if r.guard is None else self.expr(r.guard)))
+            self.parts.append(("rule", st, ntext, jobs[jk], None if r.guard is None else self.expr(r.guard), self.commands(r)))
+
+    def commands(self, r: m.Rule) -> tuple:
+        """The rule's commands as the held-status analysis sees them: which subordinate, always or in an `if`, can it fail."""
+        from rcsc.checks.held import commands
+        from rcsc.checks.plans import failure_of
+
+        if not r.jobs:
+            return ()
+        top, nested = commands(r)
+        out = []
+        for cmd in top + nested:
+            if cmd.sub not in self.design.controllers:
+                continue
+            key = (cmd.sub, cmd.verb)
+            if key not in self.fails:
+                self.fails[key] = failure_of(self.design, cmd.sub, cmd.verb) is not None
+            out.append((self.key_of(("view", cmd.sub)), cmd in nested, self.fails[key]))
+        return tuple(out)
 
     def key_of(self, key: tuple) -> int:
         if key not in self.keys:
@@ -983,7 +1171,7 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
         # Ages count base ticks: a design whose base tick differs from this
         # controller's period analyses the same plan differently.
         unit = period if design.base_tick_ns in (0, period) else (period, design.base_tick_ns)
-        canon = _Canon(design, c, plan, assigned, unit, nan)
+        canon = _Canon(design, c, plan, assigned, unit, nan, cache.setdefault("can-fail", {}))
         ckey = canon.key()
         hit = cache.get(ckey)
         if hit is not None:
@@ -1035,7 +1223,7 @@ def _stored_key(design: Design, c: m.Controller, plan: m.Plan, canon: _Canon, op
 
     types = (
         tuple((n, tuple(t.members)) for n, t in sorted(design.enums.items())),
-        tuple((n, tuple((fn, str(ft)) for fn, ft in t.fields)) for n, t in sorted(design.records.items())),
+        tuple((n, tuple((fn, str(ft), _range_key(t.field_range(fn))) for fn, ft in t.fields)) for n, t in sorted(design.records.items())),
     )
     fns = tuple(
         (
@@ -1064,6 +1252,10 @@ def _stored_key(design: Design, c: m.Controller, plan: m.Plan, canon: _Canon, op
             fns,
         )
     )
+
+
+def _range_key(rng) -> tuple | None:
+    return None if rng is None else (_vkey(rng.lo), _vkey(rng.hi))
 
 
 def _load(store, key: str, design: Design) -> list[_Finding] | None:
@@ -1112,6 +1304,7 @@ def _rename(f: _Finding, mapping: dict, states: dict) -> _Finding:
     g.state = states.get(f.state, f.state) if f.state is not None else None
     g.witness = {_rename_key(k, mapping): v for k, v in f.witness.items()}
     g.sample = {_rename_key(k, mapping): v for k, v in f.sample.items()}
+    g.held = {_rename_key(k, mapping): v for k, v in f.held.items()}
     return g
 
 
@@ -1137,10 +1330,16 @@ def _report(design: Design, c: m.Controller, plan: m.Plan, f: _Finding, diags: D
         span = f.span or plan.name_span
         d = diags.add("W0518", span, f"guard analysis of {where} is incomplete", "not analysed")
         d.with_note(f"the solver could not decide {f.question}: {_reason_text(f.reason)}")
-        d.with_note("the rest of this plan's conditions were not analysed")
+        if f.question.startswith(HELD_QUESTION):
+            d.with_note("the held-status findings of this plan (W0540, W0541, W0542) were not computed")
+        else:
+            d.with_note("the rest of this plan's conditions were not analysed")
         d.with_help("simplify the condition, or move arithmetic into `pre` (a local the rule compares)")
         data["reason"] = f.reason
         d.data = data
+        return
+    if f.code in ("W0540", "W0541", "W0542"):
+        _report_held(design, c, plan, f, diags, data)
         return
     main = rules[f.rules[0]]
     data["rules"] = [rules[i].label for i in f.rules]
@@ -1218,6 +1417,99 @@ def _report(design: Design, c: m.Controller, plan: m.Plan, f: _Finding, diags: D
     if f.approx:
         d.with_note("approximate: " + "; ".join(f.approx))
         data["approximate"] = list(f.approx)
+    d.data = data
+
+
+def path_states(plan: m.Plan, path: list[int]) -> list[tuple[m.Rule, str, str]]:
+    """The steps of a path from `new`: (rule, state it fires in, state it leads to)."""
+    from rcsc.checks.plans import rule_target
+
+    out, cur = [], "new"
+    for i in path:
+        r = plan.rules[i]
+        nxt = rule_target(r, cur) or cur
+        out.append((r, cur, nxt))
+        cur = nxt
+    return out
+
+
+def _path_text(plan: m.Plan, path: list[int]) -> str:
+    if not path:
+        return "the entry"
+    return ", ".join(f"`{r.label}` ({a} -> {b})" for r, a, b in path_states(plan, path))
+
+
+_HELD_TEXT = {
+    "any": "`{sub}` was not commanded by this plan on this path (a stale status)",
+    "none": "`{sub}` has never been commanded",
+    "run": "`{sub}` is executing `{verb}` sent by `{by}`; then its DONE or ERROR holds",
+    "done": "`{sub}` holds DONE (last commanded by `{by}`): nothing commands it again",
+    "error": "`{sub}` holds ERROR (last commanded by `{by}`): nothing commands it again",
+}
+
+
+def _held_text(plan: m.Plan, sub: str, kind: str, by: int) -> str:
+    if by < 0 and kind in ("done", "error"):
+        return f"`{sub}` holds {kind.upper()} left over from an earlier command: this plan did not command it on this path"
+    label = plan.rules[by].label if by >= 0 else "?"
+    verb = next((j.verb for j in m.walk_stmts(plan.rules[by].jobs) if isinstance(j, m.Command) and j.sub == sub), "?") if by >= 0 else "?"
+    return _HELD_TEXT[kind].format(sub=sub, by=label, verb=verb)
+
+
+def _report_held(design: Design, c: m.Controller, plan: m.Plan, f: _Finding, diags: Diagnostics, data: dict) -> None:
+    """W0540, W0541 and W0542 (`_Analysis.held`): the witness is a path from `new` and the statuses held at its end."""
+    from rcsc.checks.plans import _first_mention
+
+    rules = plan.rules
+    where = f"plan `{plan.verb}` of `{c.name}`"
+    data["state"] = f.state
+    data["path"] = [rules[i].label for i in f.path]
+    data["held"] = {k[1]: v[0] for k, v in f.held.items()}
+    data["commanded_by"] = {k[1]: (rules[v[1]].label if v[1] >= 0 else None) for k, v in f.held.items()}
+    held_notes = [_held_text(plan, k[1], v[0], v[1]) for k, v in f.held.items()]
+    if f.code == "W0540":
+        own = [i for i in f.rules if rules[i].state.kind == "named"]
+        main = rules[(own or f.rules)[0]]
+        data["rules"] = [rules[i].label for i in f.rules]
+        d = diags.add("W0540", main.label_span, f"state `{f.state}` of {where} can wait forever on a subordinate's held status", "no rule can fire")
+        d.with_note(f"path: {_path_text(plan, f.path)}")
+        for n in held_notes:
+            d.with_note(n)
+        text, wjson = _witness_text(design, c, plan, f.witness)
+        d.with_note(f"witness: {text} (held while the plan waits): no rule of `{f.state}` can fire")
+        d.with_help("command the subordinate on the way into the state, add a rule for the status it holds, or a time-out (`in_state >= ...`)")
+        data["witness"] = wjson
+        data["fires"] = None
+        if f.sample:
+            data["sample"] = _witness_text(design, c, plan, f.sample)[1]
+        ok = _replays(design, c, plan, f)
+        if not ok:
+            d.with_note("the witness is approximate: rounded to doubles, the reference evaluator does not show the claim")
+        data["replayed"] = ok
+        if f.approx:
+            d.with_note("approximate: " + "; ".join(f.approx))
+            data["approximate"] = list(f.approx)
+    elif f.code == "W0541":
+        ref = _first_mention(plan, f.state or "") if f.state != "new" else None
+        span = rules[f.rules[0]].label_span if f.rules else ref.span if ref is not None else plan.name_span
+        what = f"once in state `{f.state}` by this path, {where}" if f.path else where
+        label = f"cannot lead to `done` here" if f.rules else "`done` unreachable"
+        d = diags.add("W0541", span, f"{what} can only fail", label)
+        data["rules"] = [rules[i].label for i in f.rules]
+        d.with_note(f"path: {_path_text(plan, f.path)}")
+        for n in held_notes:
+            d.with_note(n)
+        d.with_note("the rules on the way to `done` need a status the subordinates cannot report until they are commanded again: only `error(...)` exits remain")
+        d.with_help("command the subordinate again before waiting on a new status, or test the status it holds")
+    else:  # W0542
+        r = rules[f.rules[0]]
+        sub = next(iter(f.held))[1]
+        view = next(x for x in m.walk_expr(r.guard) if isinstance(x, m.SubView) and x.sub == sub and x.attr in ("done", "status", "executing"))  # type: ignore[arg-type]
+        data["rules"] = [r.label]
+        d = diags.add("W0542", view.span, f"state `{f.state}` of {where} waits on `{sub}`, which this plan has not commanded on every way in", "stale status")
+        d.with_note(f"path: {_path_text(plan, f.path)}: no rule on it commands `{sub}`")
+        d.with_note(f"`{sub}`'s status still answers an earlier command (or none): the wait ends at once on a stale DONE, or never")
+        d.with_help(f"command `{sub}` on every way into `{f.state}`, or wait on it only where it was commanded")
     d.data = data
 
 
@@ -1442,7 +1734,7 @@ def _replays(design: Design, c: m.Controller, plan: m.Plan, f: _Finding) -> bool
     from rcsc.semantics.evaluate import eval_expr
     from rcsc.sim.simulate import Simulator
 
-    values = f.sample if f.code == "W0517" else f.witness
+    values = f.sample if f.code in ("W0517", "W0540") else f.witness
     if f.state is None or not values and f.code != "W0517":
         return True
     cpu = design.cpus.get(c.cpu) if c.cpu else None
@@ -1450,7 +1742,7 @@ def _replays(design: Design, c: m.Controller, plan: m.Plan, f: _Finding) -> bool
     try:
         env = apply_witness(sim, c.name, plan, f.state, values)
         fired = Simulator.select_rule(None, plan, f.state, env)  # type: ignore[arg-type]
-        if f.code in ("E0516", "W0517"):
+        if f.code in ("E0516", "W0517", "W0540"):
             return fired is None
         main = plan.rules[f.rules[0]]
         if f.fires is None or fired is None or fired.index != f.fires:

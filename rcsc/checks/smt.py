@@ -330,7 +330,7 @@ class Encoder:
     def _var(self, key: tuple, name: str, t: Type, rng: m.Range | None = None):
         """A variable of any type: records become a Rec of field inputs."""
         if isinstance(t, RecordType):
-            return Rec(t, lambda f, key=key, name=name, t=t: self._var(key + (f,), f"{name}.{f}", t.field_type(f)))  # type: ignore[arg-type]
+            return Rec(t, lambda f, key=key, name=name, t=t: self._var(key + (f,), f"{name}.{f}", t.field_type(f), t.field_range(f)))  # type: ignore[arg-type]
         if isinstance(t, ErrorType):
             raise HasTypeError("error type")
         return self._input(key, name, t, rng)

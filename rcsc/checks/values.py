@@ -35,7 +35,7 @@ from rcsc.checks.plans import plan_states, rule_sources
 from rcsc.diagnostics import Diagnostics
 from rcsc.semantics.model import Design
 from rcsc.checks.smt import F, Encoder, HasTypeError, Unsupported, concrete, format_value, real_of
-from rcsc.semantics.types import DURATION, FloatType, IntType, Type
+from rcsc.semantics.types import DURATION, FloatType, IntType, RecordType, Type
 
 TIMEOUT_MS = 2000
 RLIMIT = 1_000_000
@@ -104,11 +104,13 @@ class _Plan:
             # rules' conditions) are made only when a question needs them.
             def contexts(r=r, sources=sources) -> list[list]:
                 out = []
+                self.where = []
                 for s in sources:
                     before = [x for x in rules_in[s] if x.index < r.index and x.guard is not None]
                     if r.otherwise:
                         before = [x for x in rules_in[s] if x.guard is not None]
                     out.append([z3.Not(self.term(x)) for x in before])
+                    self.where.append((s, before))
                 return out
 
             def fired(r=r, contexts=contexts) -> list[list]:
@@ -127,6 +129,9 @@ class _Plan:
                     self._command(job, fired, r, assigned)
                 elif isinstance(job, m.Assign):
                     self._assign(job, fired, r, assigned)
+                for e in m.stmt_exprs(job):
+                    if not _reads(e) & assigned:
+                        self._records(e, fired, r, assigned)
                 assigned |= _assigned_names(job)
 
     # ---- questions ----
@@ -148,7 +153,7 @@ class _Plan:
         for inp in inputs[self.added:]:
             s.add(inp.constraint)
         self.added = len(inputs)
-        for ctx in contexts:
+        for n, ctx in enumerate(contexts):
             s.push()
             try:
                 s.add(*self.enc.side)
@@ -159,6 +164,7 @@ class _Plan:
             finally:
                 s.pop()
             if model is not None:
+                self.hit = n  # the context (state) of the model: `self.where[n]`
                 return model
             if res != z3.unsat and span is not None and (span.start, "unknown") not in self.reported:
                 self.reported.add((span.start, "unknown"))
@@ -174,7 +180,9 @@ class _Plan:
             return None
 
     def _witness(self, model, exprs: list[m.Expr], r: m.Rule) -> tuple[str, dict]:
+        """The inputs of `exprs` and of the earlier rules of the state where the model was found (so it replays)."""
         keys: dict[tuple, None] = {}
+        exprs = exprs + [x.guard for x in self.where[self.hit][1] if x.guard is not None]
         self.enc._used = {}
         for e in exprs:
             self._encode(e)
@@ -220,7 +228,7 @@ class _Plan:
             d = self.diags.add("W0525", x.span, f"`{x.op}` in rule `{r.label}` {what}", "overflow" if x.op not in ("/", "%") else "division by zero")
             d.with_note(f"witness: {text}")
             d.with_help("bound the operands (a declared range, a test in the condition), or use a wider type")
-            d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data}
+            d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data, "state": self.where[self.hit][0], "op": x.op}
 
     def _interval(self, e: m.Expr) -> tuple[int, int]:
         """Bounds of an integer expression from declared ranges, without wrapping."""
@@ -293,7 +301,7 @@ class _Plan:
             v = e.value
             if isinstance(v, (int, float)) and not isinstance(v, bool) and rng.lo <= v <= rng.hi:
                 return
-            model, text, data = None, f"the value is {format_value(v, t)}", {}
+            model, text, data, state = None, f"the value is {format_value(v, t)}", {}, None
         else:
             value = self._encode(e)
             if value is None or not (isinstance(value, F) or isinstance(t, IntType) or t == DURATION):
@@ -303,12 +311,31 @@ class _Plan:
                 return
             text, data = self._witness(model, [e] + ([r.guard] if r.guard is not None else []), r)
             text = "witness: " + text
+            state = self.where[self.hit][0]
         self.reported.add((e.span.start, "range"))
         lo, hi = format_value(rng.lo, t), format_value(rng.hi, t)
         d = self.diags.add("W0524", e.span, f"{what} can be outside its declared range {lo}..{hi}", "out of range")
         d.with_note(text)
         d.with_help("keep the value in the range (clamp it, or test it in the rule's condition), or widen the range")
-        d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data}
+        d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data, "range": [rng.lo, rng.hi]}
+        if state is not None:
+            d.data["state"] = state
+
+    def _assign_field(self, job: m.Assign, contexts, r: m.Rule, assigned) -> None:
+        """`var.field = value` into a ranged record field."""
+        t = job.target
+        var = {"gm": self.design.gm, "local": self.c.locals, "status": self.c.status_fields}.get(t.kind, {}).get(t.name)
+        if var is None or job.op != "=":
+            return
+        slot = _field_slot(var.type, list(t.path))
+        if slot is None:
+            return
+        rec, fname = slot
+        rng = rec.field_range(fname)
+        ftype = rec.field_type(fname)
+        if rng is None or ftype is None:
+            return
+        self._slot(job.value, rng, ftype, "`" + ".".join([t.name] + list(t.path)) + "`", contexts, r, assigned)
 
     def _command(self, cmd: m.Command, contexts, r: m.Rule, assigned) -> None:
         sub = self.design.controllers.get(cmd.sub)
@@ -318,8 +345,16 @@ class _Plan:
         for p, arg in zip(verb.params, cmd.args):
             self._slot(arg, p.range, p.type, f"argument `{p.name}` of `{cmd.sub}.{cmd.verb}`", contexts, r, assigned)
 
+    def _records(self, e: m.Expr, contexts, r: m.Rule, assigned) -> None:
+        """Each argument of a record built in `e` (`Spec(rpm = x)`) that goes into a ranged field."""
+        for x in m.walk_expr(e):
+            if isinstance(x, m.Call) and x.kind == "record" and isinstance(x.type, RecordType):
+                for (fname, ftype), arg in zip(x.type.fields, x.args):
+                    self._slot(arg, x.type.field_range(fname), ftype, f"field `{fname}` of `{x.type.name}`", contexts, r, assigned)
+
     def _assign(self, job: m.Assign, contexts, r: m.Rule, assigned) -> None:
         if job.target.path:
+            self._assign_field(job, contexts, r, assigned)
             return
         t = job.target
         var = {"gm": self.design.gm, "local": self.c.locals, "status": self.c.status_fields}.get(t.kind, {}).get(t.name)
@@ -330,3 +365,14 @@ class _Plan:
             # ran before: history, which the analysis does not follow.
             return
         self._slot(job.value, var.range, var.type, f"`{t.name}`", contexts, r, assigned)
+
+
+def _field_slot(t: Type, path) -> tuple[RecordType, str] | None:
+    """The record type and field name that an assignment to `var.a.b` writes."""
+    for p in path[:-1]:
+        if not isinstance(t, RecordType):
+            return None
+        t = t.field_type(p)  # type: ignore[assignment]
+    if not isinstance(t, RecordType) or not path:
+        return None
+    return t, path[-1]

@@ -371,7 +371,7 @@ def _command(design, checker, diags, span, cycle, cspan, ctrl: ast.Ident, verb: 
         if value is None:
             diags.add("E0204", e.span, "a command argument in a scenario must be a constant", "not constant")
             return None
-        if not _in_range(diags, e.span, p, value.value):
+        if not _in_range(diags, e.span, p, value.value) or not _fields_in_range(diags, e, p.name, p.type, value.value):
             return None
         out[p.name] = value.value
     return Command(cycle, c.name, v.name, out, span)
@@ -398,6 +398,24 @@ def _in_range(diags, span, p: m.Var, value) -> bool:
         )
         return False
     return True
+
+
+def _fields_in_range(diags, e: m.Expr, name: str, t, value) -> bool:
+    """Each field of a record argument inside its declared field range, and never NaN (E0206)."""
+    from rcsc.semantics.types import RecordType
+
+    if not isinstance(t, RecordType) or not isinstance(value, dict):
+        return True
+    ok = True
+    built = isinstance(e, m.Call) and e.kind == "record"
+    for i, (fname, ftype) in enumerate(t.fields):
+        if fname not in value:
+            continue
+        arg = e.args[i] if built and i < len(e.args) else e
+        slot = m.Var(f"{name}.{fname}", ftype, arg.span, range=t.field_range(fname))
+        if not _in_range(diags, arg.span, slot, value[fname]) or not _fields_in_range(diags, arg, slot.name, ftype, value[fname]):
+            ok = False
+    return ok
 
 
 def _constant_value(checker: Checker, e: m.Expr) -> m.Const | None:

@@ -128,7 +128,12 @@ class _Sema:
             return None
         return m.Range(lo.value, hi.value)  # type: ignore[arg-type]
 
-    def check_in_range(self, value, rng: m.Range | None, span: Span) -> None:
+    def check_in_range(self, value, rng: m.Range | None, span: Span, t: Type | None = None) -> None:
+        if isinstance(t, RecordType) and isinstance(value, dict):
+            for fname, ftype in t.fields:
+                if fname in value:
+                    self.check_in_range(value[fname], t.field_range(fname), span, ftype)
+            return
         if rng is None or not isinstance(value, (int, float)) or isinstance(value, bool):
             return
         if not (rng.lo <= value <= rng.hi):
@@ -157,7 +162,7 @@ class _Sema:
         if value is None:
             self.g.consts[item.name.name] = m.ConstDef(item.name.name, ERROR, 0, item.span)
             return
-        self.check_in_range(value.value, self.range_of(item.type, t, checker), item.value.span)
+        self.check_in_range(value.value, self.range_of(item.type, t, checker), item.value.span, t)
         self.g.consts[item.name.name] = m.ConstDef(item.name.name, t, value.value, item.span)
 
     def globals_(self) -> None:
@@ -177,6 +182,20 @@ class _Sema:
                 self.g.functions[name] = fn
         for name in self.const_ast:
             self._resolve_const_lazily(name)
+        # Record field ranges, now that the constants that may bound them are known.
+        for name, item in self.record_ast.items():
+            rt = self.g.types.get(name)
+            if not isinstance(rt, RecordType):
+                continue
+            for f in item.fields:
+                ft = rt.field_type(f.name.name)
+                if ft is not None and f.type.lo is not None:
+                    rng = self.range_of(f.type, ft, const_checker)
+                    if rng is not None:
+                        rt.ranges[f.name.name] = rng
+        for cname, const in self.g.consts.items():  # record constants were folded before their field ranges were known
+            if isinstance(const.type, RecordType) and cname in self.const_ast:
+                self.check_in_range(const.value, None, self.const_ast[cname].value.span, const.type)
         for name, item in self.decls.items():
             if isinstance(item, ast.VerbSet):
                 self.verbsets[name] = item
@@ -195,7 +214,7 @@ class _Sema:
                     value = const_checker.constant(item.init, t, "an initial value")
                     if value is not None:
                         var.init = value.value
-                        self.check_in_range(value.value, var.range, item.init.span)
+                        self.check_in_range(value.value, var.range, item.init.span, t)
                 self.g.gm[name] = var
 
     def params(self, params: list[ast.Param], checker: Checker) -> list[m.Var]:
@@ -287,7 +306,7 @@ class _Sema:
                 value = checker.constant(decl.init, t, "an initial value")
                 if value is not None:
                     var.init = value.value
-                    self.check_in_range(value.value, var.range, decl.init.span)
+                    self.check_in_range(value.value, var.range, decl.init.span, t)
             table[n] = var
         return c
 

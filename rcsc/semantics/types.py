@@ -78,6 +78,12 @@ class EnumType(Type):
 class RecordType(Type):
     fields: tuple[tuple[str, Type], ...] = ()
     span: Span | None = field(default=None, compare=False)
+    # Declared field ranges (`rpm: f64 in 0.0..3000.0`), field name -> Range;
+    # filled once the design's constants are known (they may bound a range).
+    ranges: dict = field(default_factory=dict, compare=False)
+
+    def field_range(self, name: str):
+        return self.ranges.get(name)
 
     def field_type(self, name: str) -> Type | None:
         for fname, ftype in self.fields:
