@@ -177,5 +177,6 @@ def multi_tables(tg: CTarget, cpu: m.Cpu, ctrls: list[m.Controller]) -> dict:
             f"{len(cpu_gm(d, cpu.name))}u",
             "ctrls_here" if any(c.cpu == cpu.name for c in ctrls) else "NULL",
             f"{sum(1 for c in ctrls if c.cpu == cpu.name)}u",
+            "&rcs_dds_transport" if tg.options.transport == "dds" else "&rcs_shm_transport",
         ],
     }

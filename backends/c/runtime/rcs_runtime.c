@@ -1555,7 +1555,8 @@ static void usage(FILE *o, const char *prog, const rcs_design *d) {
             prog, d->design ? d->design : "?", d->cpu ? d->cpu : "?", (double)d->period_ns / 1000.0);
     if (d->multi)
         fputs("One CPU of a multi-CPU design (start them all with the launcher, run_<design>):\n"
-              "  --run ID          the run shared by the CPUs (names the shared memory)\n"
+              "  --run ID          the run shared by the CPUs (names the shared memory or DDS partition)\n"
+              "  --domain N        the DDS domain id (a build with --transport dds; default: from the design's name)\n"
               "  --lockstep        wait for each sample the CPU reads: the simulator's trace, no clock\n"
               "  --cycles N, the scenario's cycles and `at N` count base ticks (the shortest heartbeat)\n",
               o);
@@ -1655,11 +1656,13 @@ typedef struct {
     int fast, realtime, no_timing, no_console, help, lockstep;
     uint64_t cycles; /* 0: not given */
     const char *scenario, *trace, *run;
+    long domain; /* --domain: the DDS domain id, -1: not given */
 } options;
 
 /* Returns 1, or 0 after a message on stderr. */
 static int parse_options(int argc, char **argv, options *o) {
     memset(o, 0, sizeof *o);
+    o->domain = -1;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *val = NULL;
         const char *eq = strchr(a, '=');
@@ -1678,7 +1681,7 @@ static int parse_options(int argc, char **argv, options *o) {
             o->lockstep = 1;
         else if ((IS("--help") || IS("-h")) && !val)
             o->help = 1;
-        else if (IS("--cycles") || IS("--scenario") || IS("--trace") || IS("--run")) {
+        else if (IS("--cycles") || IS("--scenario") || IS("--trace") || IS("--run") || IS("--domain")) {
             if (!val) {
                 if (i + 1 >= argc) {
                     fprintf(stderr, "rcs: %s needs a value\n", a);
@@ -1695,6 +1698,13 @@ static int parse_options(int argc, char **argv, options *o) {
                 o->scenario = val;
             } else if (IS("--run")) {
                 o->run = val;
+            } else if (IS("--domain")) {
+                uint64_t dom = 0;
+                if (!(strcmp(val, "0") == 0 || parse_count(val, &dom)) || dom > 232u) {
+                    fprintf(stderr, "rcs: --domain needs a DDS domain id from 0 to 232, not `%s`\n", val);
+                    return 0;
+                }
+                o->domain = (long)dom;
             } else {
                 o->trace = val;
             }
@@ -1833,6 +1843,33 @@ typedef struct {
     int64_t max_work;
 } run_totals;
 
+/* ---- the shared-memory transport (rcs_shm.h) behind rcs_transport ---- */
+
+static void *shm_open_link(const rcs_link_spec *spec, FILE *err) {
+    char name[256];
+    if (!rcs_shm_name(name, sizeof name, spec->design, spec->run)) return NULL;
+    return rcs_shm_open(name, spec->cpus, spec->n_cpus, spec->self, err);
+}
+static int64_t shm_start(void *l, int64_t lead_ns, int64_t timeout_ns, int (*stop)(void)) {
+    return rcs_shm_start(l, lead_ns, timeout_ns, stop);
+}
+static void shm_publish(void *l, uint64_t k, const void *payload) { rcs_shm_publish(l, k, payload); }
+static uint64_t shm_fetch(void *l, size_t writer, int64_t release, uint64_t have, void *payload, int *missing) {
+    return rcs_shm_fetch(l, writer, release, have, payload, missing);
+}
+static int shm_wait_published(void *l, size_t writer, int64_t release, int (*stop)(void)) {
+    return rcs_shm_wait_published(l, writer, release, stop);
+}
+static int shm_wait_readers(void *l, uint64_t k, int (*stop)(void)) { return rcs_shm_wait_readers(l, k, stop); }
+static void shm_next_release(void *l, int64_t release) { rcs_shm_next_release(l, release); }
+static void shm_set_state(void *l, int state) { rcs_shm_set_state(l, state); }
+static void shm_close(void *l) { rcs_shm_close(l, 1); }
+
+const rcs_transport rcs_shm_transport = {
+    "shared memory", shm_open_link, shm_start, shm_publish, shm_fetch, shm_wait_published, shm_wait_readers,
+    shm_next_release, shm_set_state, shm_close,
+};
+
 /* One CPU of a multi-CPU design: cycle k is released at (k - 1) * period
  * after the shared start; it takes the other CPUs' newest samples whose
  * deadline is at or before that instant, applies the scenario's events of
@@ -1854,8 +1891,11 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
     rcs_shm_cpu *cpus = xcalloc(mc->n_cpus, sizeof *cpus);
     size_t *at = xcalloc(mc->n_crossings + 1u, sizeof *at);
     sample_layout(d, cpus, at);
-    rcs_shm *shm = rcs_shm_open(name, cpus, mc->n_cpus, me, stderr);
-    if (shm == NULL) {
+    const rcs_transport *xp = mc->transport ? mc->transport : &rcs_shm_transport;
+    const rcs_link_spec spec = {d->design, opt->run, mc->cpu_names, cpus, mc->n_cpus, me, mc->crossings, at,
+                                mc->n_crossings, opt->domain, opt->lockstep};
+    void *link = xp->open(&spec, stderr);
+    if (link == NULL) {
         free(cpus);
         free(at);
         return 2;
@@ -1866,7 +1906,7 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
     for (size_t w = 0; w < mc->n_cpus; w++) theirs[w] = xcalloc(1, cpus[w].payload_size + 1u);
 
     int status = 0, state = RCS_SHM_FINISHED;
-    const int64_t start = rcs_shm_start(shm, opt->lockstep ? 0 : 100000000, INT64_C(10000000000), stop_flag);
+    const int64_t start = xp->start(link, opt->lockstep ? 0 : 100000000, INT64_C(10000000000), stop_flag);
     if (start < 0) {
         if (!g_stop) {
             fprintf(stderr, "rcs: CPU %s: not every CPU of %s started within 10 s\n", d->cpu, d->design);
@@ -1891,7 +1931,7 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
         const int64_t t0 = now_ns();
         for (size_t w = 0; w < mc->n_cpus; w++) {
             if (w == me || !((cpus[w].readers >> me) & 1u)) continue;
-            if (opt->lockstep && rcs_shm_wait_published(shm, w, t, stop_flag) != 0) {
+            if (opt->lockstep && xp->wait_published(link, w, t, stop_flag) != 0) {
                 if (!g_stop) {
                     fprintf(stderr, "rcs: CPU %s: CPU %s failed or is gone\n", d->cpu, mc->cpu_names[w]);
                     status = 1;
@@ -1900,21 +1940,21 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
                 goto done;
             }
             int miss = 0;
-            uint64_t got = rcs_shm_fetch(shm, w, t, have[w], theirs[w], &miss);
+            uint64_t got = xp->fetch(link, w, t, have[w], theirs[w], &miss);
             tot->missing += (uint64_t)miss;
             if (got != have[w]) {
                 have[w] = got;
                 unpack_sample(d, at, w, theirs[w]);
             }
         }
-        rcs_shm_next_release(shm, t + period);
+        xp->next_release(link, t + period);
         rcs_scenario_apply_ticks(sc, d, k == 1 ? 1u : (k - 2u) * m + 2u, tick);
         if (d->io_read) d->io_read();
         run_schedule(d, sc, st, k, tick);
         if (d->io_write) d->io_write();
         if (trace) rcs_trace_line_cpu(trace, d, k, t);
         pack_sample(d, at, mine);
-        if (opt->lockstep && rcs_shm_wait_readers(shm, k, stop_flag) != 0) {
+        if (opt->lockstep && xp->wait_readers(link, k, stop_flag) != 0) {
             if (!g_stop) {
                 fprintf(stderr, "rcs: CPU %s: a CPU that reads it failed or is gone\n", d->cpu);
                 status = 1;
@@ -1922,15 +1962,15 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
             state = RCS_SHM_FAILED;
             goto done;
         }
-        rcs_shm_publish(shm, k, mine);
+        xp->publish(link, k, mine);
         tot->cycles = k;
         const int64_t t1 = now_ns();
         if (t1 - t0 > tot->max_work) tot->max_work = t1 - t0;
         if (opt->lockstep ? t1 - t0 > period : t1 > start + t + period) tot->overruns++;
     }
 done:
-    rcs_shm_set_state(shm, state);
-    rcs_shm_close(shm, 1);
+    xp->set_state(link, state);
+    xp->close(link);
     for (size_t w = 0; w < mc->n_cpus; w++) free(theirs[w]);
     free(theirs);
     free(have);
@@ -1956,6 +1996,10 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
         fputs("rcs: a CPU of a multi-CPU design runs on its heartbeat or, without a clock, with --lockstep (not "
               "--fast)\n",
               stderr);
+        return 2;
+    }
+    if (opt.domain >= 0 && (d->multi == NULL || d->multi->transport == NULL || d->multi->transport == &rcs_shm_transport)) {
+        fprintf(stderr, "rcs: --domain is for the CPUs of a design built with `--transport dds`\n");
         return 2;
     }
     if (d->multi == NULL && (opt.lockstep || opt.run)) {

@@ -104,6 +104,38 @@ typedef struct {
     size_t stamp;     /* offset of its stamp (uint64_t tick) in the buffers struct, or RCS_NO_STAMP */
 } rcs_crossing;
 
+/* What a transport needs to know to open a CPU's link to the others. */
+typedef struct {
+    const char *design;
+    const char *run;                 /* the run id every CPU of the run shares */
+    const char *const *cpu_names;
+    const rcs_shm_cpu *cpus;         /* per CPU: heartbeat, sample size, readers */
+    size_t n_cpus, self;
+    const rcs_crossing *crossings;   /* what each sample holds ... */
+    const size_t *at;                /* ... and where: crossing i at at[i] in its writer's sample */
+    size_t n_crossings;
+    long domain;                     /* DDS domain id (--domain), -1: the transport's default */
+    int lockstep;
+} rcs_link_spec;
+
+/* The exchange between the CPUs' processes (rcs_shm.h's operations, see
+ * there): shared memory on one host (rcs_shm_transport, the default) or DDS
+ * (rcs_dds_transport in rcs_dds.c, a build with `--transport dds`). */
+typedef struct {
+    const char *name;
+    void *(*open)(const rcs_link_spec *spec, FILE *err);
+    int64_t (*start)(void *link, int64_t lead_ns, int64_t timeout_ns, int (*stop)(void));
+    void (*publish)(void *link, uint64_t k, const void *payload);
+    uint64_t (*fetch)(void *link, size_t writer, int64_t release, uint64_t have, void *payload, int *missing);
+    int (*wait_published)(void *link, size_t writer, int64_t release, int (*stop)(void));
+    int (*wait_readers)(void *link, uint64_t k, int (*stop)(void));
+    void (*next_release)(void *link, int64_t release);
+    void (*set_state)(void *link, int state);
+    void (*close)(void *link);
+} rcs_transport;
+
+extern const rcs_transport rcs_shm_transport;
+
 /* What a CPU of a multi-CPU design knows about the others. */
 typedef struct {
     size_t self;                     /* this CPU's index, in declaration order */
@@ -117,6 +149,7 @@ typedef struct {
     size_t n_gm_here;
     const size_t *ctrls_here;        /* the controllers placed on this CPU */
     size_t n_ctrls_here;
+    const rcs_transport *transport;  /* how the samples cross */
 } rcs_multi;
 
 typedef struct {
