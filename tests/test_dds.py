@@ -1,0 +1,206 @@
+"""The CPUs of a multi-CPU design exchanging their buffers over Cyclone DDS.
+
+`rcsc build --target c --transport dds` gives the same programs and launcher
+as the shared-memory build, linked with libddsc (backends/c/runtime/rcs_dds.c).
+Checked here, every process on the loopback interface only (a Cyclone
+configuration with the `lo` interface, no multicast, the peer 127.0.0.1) on a
+domain id drawn at random for this test run, so that parallel runs and other
+DDS users of the machine never meet:
+
+- with `--lockstep` the launcher's merged trace equals `rcsc sim`'s byte for
+  byte on every multi-CPU design and scenario of tests/test_multicpu_targets.py;
+- the CPUs started by hand, each in its own IPC namespace (no shared memory
+  could reach the other), give the simulator's trace too;
+- two runs of one design on one domain at once never mix (the partition);
+- a CPU killed in the middle is seen gone by the other within seconds (the
+  1 s liveliness lease), which stops instead of hanging;
+- what the build writes, and the refusals (E0820, E0821, `--domain`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import random
+import re
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+from c_build import first_difference, generate
+from test_multicpu_targets import CASES, RELAY, TWOCPU, cpu_pids, sim_trace
+
+from rcsc import cli
+
+ROOT = Path(__file__).resolve().parent.parent
+MC = ROOT / "tests" / "mc"
+
+LOOPBACK = """<CycloneDDS><Domain>
+  <General><Interfaces><NetworkInterface name="lo"/></Interfaces><AllowMulticast>false</AllowMulticast></General>
+  <Discovery><ParticipantIndex>auto</ParticipantIndex><MaxAutoParticipantIndex>40</MaxAutoParticipantIndex>
+    <Peers><Peer address="127.0.0.1"/></Peers></Discovery>
+</Domain></CycloneDDS>
+"""
+
+
+@pytest.fixture(scope="module")
+def dds_env(tmp_path_factory):
+    """The environment of every DDS process: loopback only, and this run's domain id."""
+    config = tmp_path_factory.mktemp("cyclone") / "loopback.xml"
+    config.write_text(LOOPBACK, encoding="utf-8")
+    domain = random.SystemRandom().randint(1, 232)
+    return dict(os.environ, CYCLONEDDS_URI=config.as_uri()), str(domain)
+
+
+@pytest.fixture(scope="module")
+def dds_builds(tmp_path_factory):
+    """design -> the folder of its `--transport dds` C build (gcc -O2, no warning)."""
+    base = tmp_path_factory.mktemp("dds_c")
+    cache: dict[Path, Path] = {}
+
+    def get(design: Path) -> Path:
+        if design not in cache:
+            out = base / design.stem
+            generate(design, "c", out, "--transport", "dds")
+            r = subprocess.run(["make", "-s", "CC=gcc", "CFLAGS=-O2 -Werror"], cwd=out, capture_output=True, text=True)
+            assert r.returncode == 0 and r.stderr == "", r.stderr
+            cache[design] = out
+        return cache[design]
+
+    return get
+
+
+def launcher(folder: Path) -> Path:
+    return next(p for p in folder.glob("run_*") if "." not in p.name)
+
+
+@pytest.mark.parametrize("case", CASES, ids=lambda c: f"{c[0].stem}/{c[1].stem}")
+def test_lockstep_trace_over_dds_equals_simulator(dds_builds, dds_env, case, tmp_path):
+    design, scn = case
+    env, domain = dds_env
+    trace = tmp_path / "dds.jsonl"
+    r = subprocess.run([str(launcher(dds_builds(design))), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(scn),
+                        "--trace", str(trace)], capture_output=True, text=True, timeout=120, env=env, stdin=subprocess.DEVNULL)
+    assert r.returncode == 0, r.stderr
+    want = sim_trace(design, scn, tmp_path)
+    got = trace.read_bytes()
+    assert got == want, first_difference(got, want)
+    assert len(cpu_pids(r.stderr)) == len(set(re.findall(rb'"cpu":"(\w+)"', want))) > 1
+
+
+def merge(parts: list[Path]) -> bytes:
+    """The launcher's merge: by release instant, then CPU declaration order."""
+    lines = []
+    for i, p in enumerate(parts):
+        for line in p.read_bytes().splitlines(keepends=True):
+            lines.append((int(re.search(rb',"t":(-?\d+)', line).group(1)), i, line))
+    return b"".join(line for _, _, line in sorted(lines, key=lambda x: (x[0], x[1])))
+
+
+def start_cpu(folder: Path, binary: str, run: str, env, domain: str, *args: str) -> subprocess.Popen:
+    """One CPU's program by hand, in an IPC namespace of its own: no shared
+    memory can reach it, only the network (here the loopback interface)."""
+    cmd = ["unshare", "--user", "--map-root-user", "--ipc", str(folder / binary), "--run", run, "--domain", domain, "--no-console", *args]
+    return subprocess.Popen(cmd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def test_cpus_in_separate_ipc_namespaces_give_the_simulators_trace(dds_builds, dds_env, tmp_path):
+    env, domain = dds_env
+    folder, scn = dds_builds(RELAY), MC / "relay_run.scn"
+    procs, parts = [], []
+    for cpu in ("slow", "fast"):  # declaration order
+        parts.append(tmp_path / f"{cpu}.jsonl")
+        procs.append(start_cpu(folder, f"relay_{cpu}", "by-hand", env, domain, "--lockstep", "--no-timing", "--scenario", str(scn), "--trace", str(parts[-1])))
+    for p in procs:
+        _, err = p.communicate(timeout=60)
+        assert p.returncode == 0, err
+    want = sim_trace(RELAY, scn, tmp_path)
+    got = merge(parts)
+    assert got == want, first_difference(got, want)
+    assert all(p.read_bytes() for p in parts)
+
+
+def test_two_runs_on_one_domain_never_mix(dds_builds, dds_env, tmp_path):
+    """Each run is its own partition: both give the simulator's trace."""
+    env, domain = dds_env
+    folder, scn = dds_builds(TWOCPU), MC / "twocpu_run.scn"
+    runs = []
+    for i in range(2):
+        trace = tmp_path / f"run{i}.jsonl"
+        p = subprocess.Popen([str(launcher(folder)), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(scn), "--trace", str(trace)],
+                             env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        runs.append((p, trace))
+    want = sim_trace(TWOCPU, scn, tmp_path)
+    for p, trace in runs:
+        _, err = p.communicate(timeout=120)
+        assert p.returncode == 0, err
+        assert trace.read_bytes() == want, first_difference(trace.read_bytes(), want)
+
+
+def test_a_killed_cpu_is_seen_gone_and_nothing_hangs(dds_builds, dds_env):
+    env, domain = dds_env
+    folder = dds_builds(RELAY)
+    run = f"kill-{os.getpid()}"
+    slow = start_cpu(folder, "relay_slow", run, env, domain, "--lockstep", "--no-timing", "--cycles", "100000000")
+    fast = start_cpu(folder, "relay_fast", run, env, domain, "--lockstep", "--no-timing", "--cycles", "100000000")
+    try:
+        time.sleep(1.5)
+        assert slow.poll() is None and fast.poll() is None, "both CPUs run until one is killed"
+        # unshare execs the program: its process id is the CPU's.
+        os.kill(slow.pid, signal.SIGKILL)
+        t0 = time.monotonic()
+        _, err = fast.communicate(timeout=20)
+        took = time.monotonic() - t0
+    finally:
+        for p in (slow, fast):
+            if p.poll() is None:
+                p.kill()
+            p.communicate()
+    assert fast.returncode == 1, err
+    assert re.search(r"rcs: CPU fast: (CPU slow|a CPU that reads it) failed or is gone", err), err
+    assert took < 10, f"the killed CPU was seen gone after {took:.1f} s"
+
+
+def build_cli(*argv: str) -> tuple[int, str]:
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        rc = cli.main(["build", *argv])
+    return rc, err.getvalue()
+
+
+def test_the_dds_build_links_libddsc_and_the_shm_build_does_not(dds_builds, tmp_path):
+    folder = dds_builds(RELAY)
+    assert {"rcs_dds.c", "rcs_dds.h", "rcs_shm.c"} <= {p.name for p in folder.iterdir()}
+    assert "-lddsc" in (folder / "Makefile").read_text()
+    assert "CycloneDDS::ddsc" in (folder / "CMakeLists.txt").read_text()
+    assert "&rcs_dds_transport" in (folder / "main_fast.c").read_text()
+    shm = tmp_path / "shm"
+    generate(RELAY, "c", shm)
+    assert not (shm / "rcs_dds.c").exists()
+    assert "ddsc" not in (shm / "Makefile").read_text()
+    assert "&rcs_shm_transport" in (shm / "main_fast.c").read_text()
+
+
+def test_domain_option_is_checked(dds_builds, dds_env, tmp_path):
+    env, _ = dds_env
+    folder = dds_builds(RELAY)
+    r = subprocess.run([str(folder / "relay_fast"), "--run", "x", "--domain", "233"], capture_output=True, text=True, timeout=20, env=env)
+    assert r.returncode == 2 and "--domain needs a DDS domain id from 0 to 232, not `233`" in r.stderr
+    shm = tmp_path / "shm"
+    generate(RELAY, "c", shm)
+    subprocess.run(["make", "-s"], cwd=shm, check=True, capture_output=True)
+    r = subprocess.run([str(shm / "relay_fast"), "--run", "x", "--domain", "7"], capture_output=True, text=True, timeout=20)
+    assert r.returncode == 2 and "--domain is for the CPUs of a design built with `--transport dds`" in r.stderr
+
+
+def test_a_target_or_design_without_a_dds_exchange_is_refused(tmp_path):
+    rc, err = build_cli(str(RELAY), "--target", "rust", "--transport", "dds", "-o", str(tmp_path / "r"))
+    assert rc != 0 and "error[E0820]: the rust target cannot exchange buffers over `dds`" in err
+    assert not (tmp_path / "r").exists()
+    rc, err = build_cli(str(MC / "single.rcs"), "--target", "c", "--transport", "dds", "-o", str(tmp_path / "s"))
+    assert rc != 0 and "error[E0821]: `--transport dds` carries buffers between CPUs, and this design has one CPU" in err
+    assert not (tmp_path / "s").exists()
