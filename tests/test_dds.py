@@ -204,3 +204,30 @@ def test_a_target_or_design_without_a_dds_exchange_is_refused(tmp_path):
     rc, err = build_cli(str(MC / "single.rcs"), "--target", "c", "--transport", "dds", "-o", str(tmp_path / "s"))
     assert rc != 0 and "error[E0821]: `--transport dds` carries buffers between CPUs, and this design has one CPU" in err
     assert not (tmp_path / "s").exists()
+
+
+def test_discovery_trace_shows_the_topics_types_partition_and_qos(dds_builds, dds_env, tmp_path):
+    """What docs/backends.md says a user sees in Cyclone's discovery trace."""
+    env, domain = dds_env
+    log = tmp_path / "cdds.log"
+    tracing = f"<Tracing><Category>discovery</Category><OutputFile>{log}</OutputFile></Tracing></Domain>"
+    config = tmp_path / "traced.xml"
+    config.write_text(LOOPBACK.replace("</Domain>", tracing), encoding="utf-8")
+    env = dict(env, CYCLONEDDS_URI=config.as_uri())
+    r = subprocess.run([str(launcher(dds_builds(RELAY))), "--lockstep", "--no-timing", "--domain", domain, "--cycles", "6"],
+                       capture_output=True, text=True, timeout=60, env=env, stdin=subprocess.DEVNULL)
+    assert r.returncode == 0, r.stderr
+    text = log.read_text(errors="replace")
+    writers = {}
+    for m in re.finditer(r'topic_name="(rcs/relay/[^"]+)",type_name="([^"]+)",.*?deadline=(\d+),.*?liveliness=0:(\d+),'
+                         r'reliability=(\d):.*?history=(\d+):(\d+),.*?partition=\{"(rcs/relay/[^"]+)"\}', text):
+        writers[m.group(1)] = m.groups()[1:]
+    assert set(writers) == {"rcs/relay/cpu/fast", "rcs/relay/cpu/slow", "rcs/relay/control"}, sorted(writers)
+    fast, slow, control = writers["rcs/relay/cpu/fast"], writers["rcs/relay/cpu/slow"], writers["rcs/relay/control"]
+    assert re.fullmatch(r"rcs::relay::fast_[0-9a-f]{16}", fast[0]) and control[0] == "rcs::control"
+    # deadline = the writer's heartbeat (fast 10 ms, slow 30 ms), a 1 s liveliness lease,
+    # reliable, KEEP_LAST 4 (the control topic: 1 per CPU), one partition per run.
+    assert fast[1:6] == ("10000000", "1000000000", "1", "0", "4")
+    assert slow[1:6] == ("30000000", "1000000000", "1", "0", "4")
+    assert control[5] == "1"
+    assert fast[6] == slow[6] == control[6] and fast[6].startswith("rcs/relay/")
