@@ -656,13 +656,14 @@ controller every cycle or reads a made-up age.
 `rcsc build --transport` chooses how the buffers that cross between CPUs
 travel from one CPU's process to another's: `shm` (POSIX shared memory, every
 CPU on one host, the default) or `dds` (Eclipse Cyclone DDS, the CPUs on any
-hosts of a network). A target builds only the transports it has; the others
-are refused rather than silently replaced by shared memory, which would not
-reach another host.
+hosts of a network). A target builds only the transports it has (the C and
+Rust targets have both; a new target may start with shared memory alone);
+the others are refused rather than silently replaced by shared memory, which
+would not reach another host.
 
-Wrong:
+Wrong (a target without the DDS transport):
 
-    rcsc build ship.rcs --target rust --transport dds -o build/ship-rust
+    rcsc build ship.rcs --target mytarget --transport dds -o build/ship
 
 Fixed:
 

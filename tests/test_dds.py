@@ -1,7 +1,9 @@
 """The CPUs of a multi-CPU design exchanging their buffers over Cyclone DDS.
 
 `rcsc build --target c --transport dds` gives the same programs and launcher
-as the shared-memory build, linked with libddsc (backends/c/runtime/rcs_dds.c).
+as the shared-memory build, linked with libddsc (backends/c/runtime/rcs_dds.c);
+`--target rust --transport dds` the same through the crate rcs_dds, a safe
+wrapper of that C file kept outside the no_std, unsafe-free controller crate.
 Checked here, every process on the loopback interface only (a Cyclone
 configuration with the `lo` interface, no multicast, the peer 127.0.0.1) on a
 domain id drawn at random for this test run, so that parallel runs and other
@@ -14,7 +16,9 @@ DDS users of the machine never meet:
 - two runs of one design on one domain at once never mix (the partition);
 - a CPU killed in the middle is seen gone by the other within seconds (the
   1 s liveliness lease), which stops instead of hanging;
-- what the build writes, and the refusals (E0820, E0821, `--domain`).
+- what the build writes, and the refusals (E0820, E0821, `--domain`);
+- Rust+Rust: the Rust launcher's lockstep trace equals the simulator's (the
+  build passes clippy -D warnings and rustfmt, the wrapper crate too).
 """
 
 from __future__ import annotations
@@ -198,9 +202,22 @@ def test_domain_option_is_checked(dds_builds, dds_env, tmp_path):
 
 
 def test_a_target_or_design_without_a_dds_exchange_is_refused(tmp_path):
-    rc, err = build_cli(str(RELAY), "--target", "rust", "--transport", "dds", "-o", str(tmp_path / "r"))
-    assert rc != 0 and "error[E0820]: the rust target cannot exchange buffers over `dds`" in err
-    assert not (tmp_path / "r").exists()
+    from rcsc.diagnostics import Diagnostics
+    from rcsc.driver import check_path
+    from rcsc.outputs.backend import BuildOptions, Target
+
+    class SharedMemoryOnly(Target):
+        name = "plain"
+        multi_cpu = True
+
+    result = check_path(str(RELAY))
+    assert result.model is not None
+    diags = Diagnostics()
+    SharedMemoryOnly(result.model, BuildOptions(transport="dds")).check(diags)
+    assert [(d.code, d.message) for d in diags.items] == [("E0820", "the plain target cannot exchange buffers over `dds`; it has shm")]
+    diags = Diagnostics()
+    SharedMemoryOnly(result.model, BuildOptions(transport="shm")).check(diags)
+    assert diags.items == []
     rc, err = build_cli(str(MC / "single.rcs"), "--target", "c", "--transport", "dds", "-o", str(tmp_path / "s"))
     assert rc != 0 and "error[E0821]: `--transport dds` carries buffers between CPUs, and this design has one CPU" in err
     assert not (tmp_path / "s").exists()
@@ -209,15 +226,17 @@ def test_a_target_or_design_without_a_dds_exchange_is_refused(tmp_path):
 def test_discovery_trace_shows_the_topics_types_partition_and_qos(dds_builds, dds_env, tmp_path):
     """What docs/backends.md says a user sees in Cyclone's discovery trace."""
     env, domain = dds_env
-    log = tmp_path / "cdds.log"
-    tracing = f"<Tracing><Category>discovery</Category><OutputFile>{log}</OutputFile></Tracing></Domain>"
+    # one log per process (Cyclone expands ${CYCLONEDDS_PID})
+    tracing = f"<Tracing><Category>discovery</Category><OutputFile>{tmp_path}/cdds-${{CYCLONEDDS_PID}}.log</OutputFile></Tracing></Domain>"
     config = tmp_path / "traced.xml"
     config.write_text(LOOPBACK.replace("</Domain>", tracing), encoding="utf-8")
     env = dict(env, CYCLONEDDS_URI=config.as_uri())
     r = subprocess.run([str(launcher(dds_builds(RELAY))), "--lockstep", "--no-timing", "--domain", domain, "--cycles", "6"],
                        capture_output=True, text=True, timeout=60, env=env, stdin=subprocess.DEVNULL)
     assert r.returncode == 0, r.stderr
-    text = log.read_text(errors="replace")
+    logs = sorted(tmp_path.glob("cdds-*.log"))
+    assert len(logs) == 2, logs
+    text = "".join(log.read_text(errors="replace") for log in logs)
     writers = {}
     for m in re.finditer(r'topic_name="(rcs/relay/[^"]+)",type_name="([^"]+)",.*?deadline=(\d+),.*?liveliness=0:(\d+),'
                          r'reliability=(\d):.*?history=(\d+):(\d+),.*?partition=\{"(rcs/relay/[^"]+)"\}', text):
@@ -231,3 +250,63 @@ def test_discovery_trace_shows_the_topics_types_partition_and_qos(dds_builds, dd
     assert slow[1:6] == ("30000000", "1000000000", "1", "0", "4")
     assert control[5] == "1"
     assert fast[6] == slow[6] == control[6] and fast[6].startswith("rcs/relay/")
+
+
+@pytest.fixture(scope="module")
+def rust_dds_builds(tmp_path_factory):
+    """design -> the cargo release folder of its `--transport dds` Rust build."""
+    base = tmp_path_factory.mktemp("dds_rust")
+    cache: dict[Path, Path] = {}
+
+    def get(design: Path) -> Path:
+        if design not in cache:
+            crate = base / design.stem
+            generate(design, "rust", crate, "--transport", "dds")
+            env = dict(os.environ, CARGO_TARGET_DIR=str(base / f"target-{design.stem}"), CARGO_TERM_COLOR="never")
+            for folder in (crate, crate / "rcs_dds"):  # clippy lints the wrapper crate on its own
+                for cmd in (["cargo", "build", "--offline", "--release"], ["cargo", "clippy", "--offline", "--release", "--", "-D", "warnings"]):
+                    r = subprocess.run(cmd, cwd=folder, env=env, capture_output=True, text=True)
+                    assert r.returncode == 0, r.stderr[-4000:]
+                    assert not re.search(r"^warning", r.stderr, re.M), r.stderr[-4000:]
+            files = [str(p) for p in crate.rglob("*.rs")]
+            r = subprocess.run(["rustfmt", "--check", "--edition", "2021", *files], capture_output=True, text=True)
+            assert r.returncode == 0, r.stdout[-4000:]
+            cache[design] = base / f"target-{design.stem}" / "release"
+        return cache[design]
+
+    return get
+
+
+@pytest.mark.parametrize("case", CASES, ids=lambda c: f"{c[0].stem}/{c[1].stem}")
+def test_rust_lockstep_trace_over_dds_equals_simulator(rust_dds_builds, dds_env, case, tmp_path):
+    design, scn = case
+    env, domain = dds_env
+    trace = tmp_path / "rust-dds.jsonl"
+    r = subprocess.run([str(launcher(rust_dds_builds(design))), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(scn),
+                        "--trace", str(trace)], capture_output=True, text=True, timeout=120, env=env, stdin=subprocess.DEVNULL)
+    assert r.returncode == 0, r.stderr
+    want = sim_trace(design, scn, tmp_path)
+    got = trace.read_bytes()
+    assert got == want, first_difference(got, want)
+    assert len(cpu_pids(r.stderr)) > 1
+
+
+def test_rust_dds_build_keeps_the_controller_crate_free_of_unsafe_and_c(rust_dds_builds, tmp_path):
+    crate = tmp_path / "crate"
+    generate(RELAY, "rust", crate, "--transport", "dds")
+    lib = (crate / "src" / "lib.rs").read_text()
+    assert "#![no_std]" in lib and "#![forbid(unsafe_code)]" in lib
+    assert not any(re.search(r"\bunsafe\s*(\{|fn\b|extern\b|impl\b)", p.read_text()) for p in (crate / "src").rglob("*.rs"))
+    assert re.search(r"\bunsafe\s*\{", (crate / "rcs_dds" / "src" / "lib.rs").read_text())
+    cargo = (crate / "Cargo.toml").read_text()
+    assert 'rcs_dds = { path = "rcs_dds", optional = true }' in cargo and 'default = ["dds"]' in cargo
+    assert {p.name for p in (crate / "rcs_dds" / "c").iterdir()} == {"rcs_dds.c", "rcs_dds.h", "rcs_link.h", "rcs_shm.h"}
+    # The C file is the C target's, byte for byte: one definition of the protocol.
+    c_build = tmp_path / "c"
+    generate(RELAY, "c", c_build, "--transport", "dds")
+    assert (crate / "rcs_dds" / "c" / "rcs_dds.c").read_bytes() == (c_build / "rcs_dds.c").read_bytes()
+    shm = tmp_path / "shm"
+    generate(RELAY, "rust", shm)
+    assert not (shm / "rcs_dds").exists() and "rcs_dds" not in (shm / "Cargo.toml").read_text().split("[dependencies]")[1]
+    r = subprocess.run([str(rust_dds_builds(RELAY) / "relay_fast"), "--run", "x", "--domain", "233"], capture_output=True, text=True, timeout=20)
+    assert r.returncode == 2 and "--domain needs a DDS domain id from 0 to 232, not `233`" in r.stderr

@@ -28,7 +28,7 @@ from rcsc.backends.c.target import CTarget, _strip_parens, c_comment, c_string
 from rcsc.sim.simulate import zero_value
 from rcsc.semantics.types import I32, EnumType, RecordType
 
-RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c", "rcs_shm.h", "rcs_shm.c")
+RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c", "rcs_link.h", "rcs_shm.h", "rcs_shm.c")
 LAUNCHER_FILES = ("rcs_launch.h", "rcs_launch.c")  # several CPUs only
 DDS_FILES = ("rcs_dds.h", "rcs_dds.c")  # several CPUs built with `--transport dds`
 

@@ -30,7 +30,7 @@
 #ifndef RCS_DDS_H
 #define RCS_DDS_H
 
-#include "rcs_runtime.h"
+#include "rcs_link.h"
 
 extern const rcs_transport rcs_dds_transport;
 

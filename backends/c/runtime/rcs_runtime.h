@@ -19,6 +19,7 @@
 #include <stdio.h>
 
 #include "rcs_num.h"
+#include "rcs_link.h"
 #include "rcs_shm.h"
 
 /* Storage of each kind: bool, int32_t, int64_t, uint32_t, double,
@@ -92,49 +93,6 @@ typedef struct {
     uint64_t divider;        /* steps on the cycles k with (k - 1) % divider == 0 (0 counts as 1) */
 } rcs_ctrl;
 
-/* No stamp: a command buffer, or Global Memory when the design reads no age of it. */
-#define RCS_NO_STAMP ((size_t)-1)
-
-/* A buffer that one CPU writes and others read (each keeps its own copy). */
-typedef struct {
-    size_t writer;    /* CPU index */
-    uint64_t readers; /* bit r: CPU r reads it */
-    size_t offset;    /* the buffer in the buffers struct */
-    size_t size;
-    size_t stamp;     /* offset of its stamp (uint64_t tick) in the buffers struct, or RCS_NO_STAMP */
-} rcs_crossing;
-
-/* What a transport needs to know to open a CPU's link to the others. */
-typedef struct {
-    const char *design;
-    const char *run;                 /* the run id every CPU of the run shares */
-    const char *const *cpu_names;
-    const rcs_shm_cpu *cpus;         /* per CPU: heartbeat, sample size, readers */
-    size_t n_cpus, self;
-    const rcs_crossing *crossings;   /* what each sample holds ... */
-    const size_t *at;                /* ... and where: crossing i at at[i] in its writer's sample */
-    size_t n_crossings;
-    long domain;                     /* DDS domain id (--domain), -1: the transport's default */
-    int lockstep;
-} rcs_link_spec;
-
-/* The exchange between the CPUs' processes (rcs_shm.h's operations, see
- * there): shared memory on one host (rcs_shm_transport, the default) or DDS
- * (rcs_dds_transport in rcs_dds.c, a build with `--transport dds`). */
-typedef struct {
-    const char *name;
-    void *(*open)(const rcs_link_spec *spec, FILE *err);
-    int64_t (*start)(void *link, int64_t lead_ns, int64_t timeout_ns, int (*stop)(void));
-    void (*publish)(void *link, uint64_t k, const void *payload);
-    uint64_t (*fetch)(void *link, size_t writer, int64_t release, uint64_t have, void *payload, int *missing);
-    int (*wait_published)(void *link, size_t writer, int64_t release, int (*stop)(void));
-    int (*wait_readers)(void *link, uint64_t k, int (*stop)(void));
-    void (*next_release)(void *link, int64_t release);
-    void (*set_state)(void *link, int state);
-    void (*close)(void *link);
-} rcs_transport;
-
-extern const rcs_transport rcs_shm_transport;
 
 /* What a CPU of a multi-CPU design knows about the others. */
 typedef struct {
