@@ -1788,10 +1788,85 @@ static void run_schedule(const rcs_design *d, const rcs_scenario *sc, step_stats
 
 static size_t round8(size_t n) { return (n + 7u) / 8u * 8u; }
 
-/* The shared-memory layout, the same in every CPU's process: per CPU its
+/* ---- the canonical encoding (rcs_wire) ---- */
+
+static size_t leaf_width(int kind) {
+    return kind == RCS_W_BOOL ? 1u : kind == RCS_W_I32 || kind == RCS_W_U32 ? 4u : 8u;
+}
+
+/* Bytes of crossing i on the wire: its canonical encoding, or its bytes. */
+static size_t wire_size(const rcs_multi *mc, size_t i) {
+    if (mc->wire == NULL) return mc->crossings[i].size;
+    size_t n = 0;
+    for (size_t j = 0; j < mc->wire[i].n_leaves; j++) n += leaf_width(mc->wire[i].leaves[j].kind);
+    return n;
+}
+
+static void put_le(unsigned char *p, uint64_t v, size_t n) {
+    for (size_t i = 0; i < n; i++) p[i] = (unsigned char)(v >> (8u * i));
+}
+
+static uint64_t get_le(const unsigned char *p, size_t n) {
+    uint64_t v = 0;
+    for (size_t i = 0; i < n; i++) v |= (uint64_t)p[i] << (8u * i);
+    return v;
+}
+
+/* The scalars of crossing i from the buffers at `b` into `out`. */
+static void encode_leaves(const rcs_wire *w, const unsigned char *b, unsigned char *out) {
+    for (size_t j = 0; j < w->n_leaves; j++) {
+        const rcs_leaf *l = &w->leaves[j];
+        const size_t n = leaf_width(l->kind);
+        uint64_t v = 0;
+        if (l->kind == RCS_W_BOOL) {
+            unsigned char c;
+            memcpy(&c, b + l->offset, 1u);
+            v = c != 0u;
+        } else if (l->kind == RCS_W_I32 || l->kind == RCS_W_U32) {
+            uint32_t u;
+            memcpy(&u, b + l->offset, sizeof u);
+            v = u;
+        } else if (l->kind == RCS_W_ENUM) {
+            int32_t e;
+            memcpy(&e, b + l->offset, sizeof e);
+            v = (uint64_t)(int64_t)e;
+        } else {
+            memcpy(&v, b + l->offset, sizeof v);
+        }
+        put_le(out, v, n);
+        out += n;
+    }
+}
+
+/* Back into the buffers at `b`; a command's arguments only for its verb. */
+static void decode_leaves(const rcs_wire *w, unsigned char *b, const unsigned char *in) {
+    for (size_t j = 0; j < w->n_leaves; j++) {
+        const rcs_leaf *l = &w->leaves[j];
+        const size_t n = leaf_width(l->kind);
+        const uint64_t v = get_le(in, n);
+        in += n;
+        if (l->guard != RCS_NO_STAMP) {
+            int32_t verb;
+            memcpy(&verb, b + l->guard, sizeof verb);
+            if (verb != l->verb) continue;
+        }
+        if (l->kind == RCS_W_BOOL) {
+            unsigned char c = v != 0u;
+            memcpy(b + l->offset, &c, 1u);
+        } else if (l->kind == RCS_W_I32 || l->kind == RCS_W_U32 || l->kind == RCS_W_ENUM) {
+            uint32_t u = (uint32_t)v;
+            memcpy(b + l->offset, &u, sizeof u);
+        } else {
+            memcpy(b + l->offset, &v, sizeof v);
+        }
+    }
+}
+
+/* The sample layout, the same in every CPU's process: per CPU its
  * heartbeat, the CPUs that read it and its sample size; at[i]: where
  * crossing i sits in its writer's sample (its bytes rounded up to 8, then
- * its stamp when it has one). */
+ * its stamp when it has one; in the canonical encoding always a stamp, 0
+ * for none, as a Rust CPU lays it out). */
 static void sample_layout(const rcs_design *d, rcs_shm_cpu *cpus, size_t *at) {
     const rcs_multi *mc = d->multi;
     for (size_t c = 0; c < mc->n_cpus; c++) {
@@ -1803,7 +1878,7 @@ static void sample_layout(const rcs_design *d, rcs_shm_cpu *cpus, size_t *at) {
         const rcs_crossing *x = &mc->crossings[i];
         rcs_shm_cpu *w = &cpus[x->writer];
         at[i] = w->payload_size;
-        w->payload_size += round8(x->size) + (x->stamp != RCS_NO_STAMP ? 8u : 0u);
+        w->payload_size += round8(wire_size(mc, i)) + (x->stamp != RCS_NO_STAMP || mc->wire ? 8u : 0u);
         w->readers |= x->readers;
     }
 }
@@ -1816,13 +1891,18 @@ static void pack_sample(const rcs_design *d, const size_t *at, unsigned char *sa
     for (size_t i = 0; i < mc->n_crossings; i++) {
         const rcs_crossing *x = &mc->crossings[i];
         if (x->writer != mc->self) continue;
-        memcpy(sample + at[i], b + x->offset, x->size);
+        uint64_t st = 0;
         if (x->stamp != RCS_NO_STAMP) {
-            uint64_t st;
             memcpy(&st, b + x->stamp, sizeof st);
             if (st != 0) st += mc->ticks[mc->self];
-            memcpy(sample + at[i] + round8(x->size), &st, sizeof st);
         }
+        if (mc->wire) {
+            encode_leaves(&mc->wire[i], b, sample + at[i]);
+            put_le(sample + at[i] + round8(wire_size(mc, i)), st, 8u);
+            continue;
+        }
+        memcpy(sample + at[i], b + x->offset, x->size);
+        if (x->stamp != RCS_NO_STAMP) memcpy(sample + at[i] + round8(x->size), &st, sizeof st);
     }
 }
 
@@ -1833,6 +1913,14 @@ static void unpack_sample(const rcs_design *d, const size_t *at, size_t writer, 
     for (size_t i = 0; i < mc->n_crossings; i++) {
         const rcs_crossing *x = &mc->crossings[i];
         if (x->writer != writer || !((x->readers >> mc->self) & 1u)) continue;
+        if (mc->wire) {
+            decode_leaves(&mc->wire[i], b, sample + at[i]);
+            if (x->stamp != RCS_NO_STAMP) {
+                uint64_t st = get_le(sample + at[i] + round8(wire_size(mc, i)), 8u);
+                memcpy(b + x->stamp, &st, sizeof st);
+            }
+            continue;
+        }
         memcpy(b + x->offset, sample + at[i], x->size);
         if (x->stamp != RCS_NO_STAMP) memcpy(b + x->stamp, sample + at[i] + round8(x->size), sizeof(uint64_t));
     }
@@ -1892,10 +1980,20 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
     size_t *at = xcalloc(mc->n_crossings + 1u, sizeof *at);
     sample_layout(d, cpus, at);
     const rcs_transport *xp = mc->transport ? mc->transport : &rcs_shm_transport;
-    const rcs_link_spec spec = {d->design, opt->run, mc->cpu_names, cpus, mc->n_cpus, me, mc->crossings, at,
+    /* In the canonical encoding the transport sees the sizes on the wire and a stamp for every buffer. */
+    rcs_crossing *wx = xcalloc(mc->n_crossings + 1u, sizeof *wx);
+    for (size_t i = 0; i < mc->n_crossings; i++) {
+        wx[i] = mc->crossings[i];
+        if (mc->wire) {
+            wx[i].size = wire_size(mc, i);
+            wx[i].stamp = 0;
+        }
+    }
+    const rcs_link_spec spec = {d->design, opt->run, mc->cpu_names, cpus, mc->n_cpus, me, wx, at,
                                 mc->n_crossings, opt->domain, opt->lockstep};
     void *link = xp->open(&spec, stderr);
     if (link == NULL) {
+        free(wx);
         free(cpus);
         free(at);
         return 2;
@@ -1971,6 +2069,7 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
 done:
     xp->set_state(link, state);
     xp->close(link);
+    free(wx);
     for (size_t w = 0; w < mc->n_cpus; w++) free(theirs[w]);
     free(theirs);
     free(have);

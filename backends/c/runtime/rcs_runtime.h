@@ -94,6 +94,23 @@ typedef struct {
 } rcs_ctrl;
 
 
+/* The canonical encoding of a crossing buffer (the DDS transport, so that C
+ * and Rust CPUs interoperate): its scalars in order, each little-endian in
+ * its width (bool 1 byte, i32/u32 4, i64/f64/duration 8, an enum's member
+ * index in 8).  A leaf with a guard is a command's argument: it is read
+ * back only when the int32_t at `guard` (the command's verb) is `verb`. */
+enum { RCS_W_BOOL = 1, RCS_W_I32, RCS_W_U32, RCS_W_I64, RCS_W_F64, RCS_W_ENUM };
+typedef struct {
+    size_t offset; /* in the buffers struct */
+    size_t guard;  /* offset of the verb it belongs to, or RCS_NO_STAMP */
+    int32_t verb;
+    int kind;      /* RCS_W_* */
+} rcs_leaf;
+typedef struct {
+    const rcs_leaf *leaves;
+    size_t n_leaves;
+} rcs_wire;
+
 /* What a CPU of a multi-CPU design knows about the others. */
 typedef struct {
     size_t self;                     /* this CPU's index, in declaration order */
@@ -108,6 +125,7 @@ typedef struct {
     const size_t *ctrls_here;        /* the controllers placed on this CPU */
     size_t n_ctrls_here;
     const rcs_transport *transport;  /* how the samples cross */
+    const rcs_wire *wire;            /* per crossing, its canonical encoding; NULL: its bytes as they are */
 } rcs_multi;
 
 typedef struct {
