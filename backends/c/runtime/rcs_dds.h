@@ -12,8 +12,9 @@
  *     `rcs/<design>/cpu/<CPU>`, type `rcs::<design>::<CPU>_<layout>`: the
  *     writer's cycle k (its deadline is k * period), a serial (the samples
  *     this process published), then each buffer that CPU writes as an octet
- *     array followed by its stamp; <layout> (16 hex digits) changes with
- *     the layout, so two builds that disagree never match;
+ *     array (its canonical encoding, rcs_runtime.h's rcs_wire: the bytes a
+ *     Rust CPU sends too) followed by its stamp; <layout> (16 hex digits)
+ *     changes with the layout, so two builds that disagree never match;
  *   - one keyed topic `rcs/<design>/control`, an instance per CPU: its run
  *     state, the last cycle it published when it stopped, its next release
  *     (lockstep) and the instant it was ready (the start barrier).
