@@ -355,3 +355,63 @@ def test_c_and_rust_cpus_interoperate(dds_builds, rust_dds_builds, dds_env, case
     want = sim_trace(design, scn, tmp_path)
     got = merge(parts)
     assert got == want, first_difference(got, want)
+
+
+KILL_SCN = """scenario "the servo CPU killed and started again"
+cycles 600
+at 1: MT.CUT(x0 = 20.0, x1 = 120.0, rpm = 3000.0, feed = 1200.0)
+"""
+
+
+@pytest.mark.parametrize("servo", ["c", "rust"])
+def test_a_killed_cpu_started_again_resumes_the_exchange(dds_builds, rust_dds_builds, dds_env, servo, tmp_path):
+    """Real time, each CPU by hand: SERVO_CPU is killed during the cut.  The
+    planner keeps its heartbeat, AXIS's watchdog on age(x_pos) fires; SERVO_CPU
+    started again joins the running timeline (its first cycle is the next
+    release, not 1) and the planner's copies are fresh again."""
+    env, domain = dds_env
+    design = ROOT / "examples" / "machine_tool" / "machine_tool.rcs"
+    folders = {"c": dds_builds(design), "rust": rust_dds_builds(design)}
+    scn = tmp_path / "kill.scn"
+    scn.write_text(KILL_SCN, encoding="utf-8")
+    run = f"restart-{servo}-{os.getpid()}"
+    common = ("--scenario", str(scn), "--no-timing")
+    plan_trace, first_trace, again_trace = tmp_path / "plan.jsonl", tmp_path / "servo1.jsonl", tmp_path / "servo2.jsonl"
+    planner = start_cpu(folders["c"], "machine_tool_PLAN_CPU", run, env, domain, *common, "--trace", str(plan_trace))
+    first = start_cpu(folders[servo], "machine_tool_SERVO_CPU", run, env, domain, *common, "--trace", str(first_trace))
+    again = None
+    try:
+        time.sleep(2.0)
+        assert first.poll() is None and planner.poll() is None
+        os.kill(first.pid, signal.SIGKILL)
+        first.communicate(timeout=10)
+        time.sleep(1.0)
+        again = start_cpu(folders[servo], "machine_tool_SERVO_CPU", run, env, domain, *common, "--trace", str(again_trace))
+        _, err = planner.communicate(timeout=30)
+        assert planner.returncode == 0, err
+        _, err = again.communicate(timeout=30)
+        assert again.returncode == 0, err
+    finally:
+        for p in (planner, first, again):
+            if p is not None and p.poll() is None:
+                p.kill()
+                p.communicate()
+    import json
+
+    plan = [json.loads(x) for x in plan_trace.read_text().splitlines()]
+    assert [j["cycle"] for j in plan] == list(range(1, 121)), "the planner kept its heartbeat: 120 cycles of 50 ms"
+    again_lines = [json.loads(x) for x in again_trace.read_text().splitlines()]
+    back_at = again_lines[0]["t"]
+    assert again_lines[0]["cycle"] > 1 and again_lines[0]["t"] == (again_lines[0]["cycle"] - 1) * 10_000_000
+    axis = [(j["t"], j["ctrl"]["AXIS"]) for j in plan]
+    # The kill shows as the first copy older than a servo cycle (50 ms: a planner cycle).
+    killed_at = next(t for t, a in axis if a["fields"]["pos_age"] > 50_000_000)
+    assert 500_000_000 <= killed_at < back_at - 500_000_000, (killed_at, back_at)
+    # While it is dead the copies age and the watchdog fires (STALE is 150 ms).
+    stale = [(t, a) for t, a in axis if killed_at + 200_000_000 <= t < back_at]
+    assert stale and all(a["fields"]["pos_age"] > 150_000_000 for _, a in stale)
+    assert any(a["status"] == "ERROR" and a["rule"] == "W1" for _, a in stale)
+    # Started again: the exchange resumes, the copies are fresh and x_pos moves again.
+    after = [j for j in plan if j["t"] >= back_at + 200_000_000]
+    assert after and all(j["ctrl"]["AXIS"]["fields"]["pos_age"] <= 50_000_000 for j in after)
+    assert len({j["gm"]["x_pos"] for j in after}) > 3

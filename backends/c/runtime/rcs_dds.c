@@ -29,6 +29,7 @@ typedef struct {
     uint64_t published;   /* the last cycle it published (when it no longer runs) */
     int64_t next_release; /* as a reader, the next release it will fetch at (lockstep) */
     int64_t ready;        /* CLOCK_REALTIME ns at which it was ready to start (0: not yet) */
+    int64_t start;        /* CLOCK_REALTIME ns of the run's start, once it runs (0: not yet) */
 } ctl_sample;
 
 static const uint32_t ctl_ops[] = {
@@ -37,10 +38,11 @@ static const uint32_t ctl_ops[] = {
     DDS_OP_ADR | DDS_OP_TYPE_8BY, offsetof(ctl_sample, published),
     DDS_OP_ADR | DDS_OP_TYPE_8BY | DDS_OP_FLAG_SGN, offsetof(ctl_sample, next_release),
     DDS_OP_ADR | DDS_OP_TYPE_8BY | DDS_OP_FLAG_SGN, offsetof(ctl_sample, ready),
+    DDS_OP_ADR | DDS_OP_TYPE_8BY | DDS_OP_FLAG_SGN, offsetof(ctl_sample, start),
     DDS_OP_RTS,
     DDS_OP_KOF | 1, 0u,
 };
-static const dds_key_descriptor_t ctl_keys[1] = {{"cpu", 11, 0}};
+static const dds_key_descriptor_t ctl_keys[1] = {{"cpu", 13, 0}};
 
 /* What this process knows of one CPU. */
 typedef struct {
@@ -155,7 +157,7 @@ static dds_topic_descriptor_t *sample_type(const rcs_link_spec *s, size_t cpu, u
 
 static const dds_topic_descriptor_t ctl_desc = {
     sizeof(ctl_sample), 8u, DDS_TOPIC_FIXED_KEY | DDS_TOPIC_FIXED_KEY_XCDR2 | DDS_TOPIC_FIXED_SIZE, 1u,
-    "rcs::control", ctl_keys, 6u, ctl_ops, "", {NULL, 0u}, {NULL, 0u}, 0u,
+    "rcs::control", ctl_keys, 7u, ctl_ops, "", {NULL, 0u}, {NULL, 0u}, 0u,
 };
 
 static void dds_close_link(void *l);
@@ -357,12 +359,19 @@ static int64_t dds_start(void *lp, int64_t lead_ns, int64_t timeout_ns, int (*st
         }
     }
     /* 2: every CPU ready: the start is the last of them plus the lead, on the
-     * shared wall clock, here on this host's monotonic clock. */
-    int64_t last = 0;
-    for (size_t c = 0; c < l->spec.n_cpus; c++)
-        if (l->peers[c].ctl.ready > last) last = l->peers[c].ctl.ready;
+     * shared wall clock, here on this host's monotonic clock.  A CPU started
+     * again while the others run (real time) takes the run's start: the
+     * runtime then skips the cycles whose release has passed. */
+    int64_t last = 0, running = 0;
+    for (size_t c = 0; c < l->spec.n_cpus; c++) {
+        const ctl_sample *o = &l->peers[c].ctl;
+        if (o->ready > last) last = o->ready;
+        if (c != l->spec.self && o->state == RCS_SHM_RUNNING && o->start != 0) running = o->start;
+    }
     if (lead_ns <= 0) return mono_ns();
-    const int64_t start = mono_ns() + (last + lead_ns - real_ns());
+    l->me.start = running ? running : last + lead_ns;
+    if (!write_ctl(l)) return -1;
+    const int64_t start = mono_ns() + (l->me.start - real_ns());
     return start > 0 ? start : 1;
 }
 

@@ -2014,7 +2014,11 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
     }
     const int64_t period = d->period_ns;
     const uint64_t m = mc->ticks[me], stop_tick = rcs_scenario_stop_tick(sc);
-    for (uint64_t k = 1; start >= 0; k++) {
+    /* A CPU that joins a running run (DDS, started again) begins at the
+     * first cycle whose release is still ahead. */
+    uint64_t first = 1;
+    if (!opt->lockstep && start >= 0 && now_ns() - start > period) first = (uint64_t)((now_ns() - start) / period) + 2u;
+    for (uint64_t k = first; start >= 0; k++) {
         const uint64_t tick = (k - 1u) * m + 1u;
         if (g_stop || (limit && tick > limit)) break;
         if (stop_tick && tick >= stop_tick) {
@@ -2046,7 +2050,7 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
             }
         }
         xp->next_release(link, t + period);
-        rcs_scenario_apply_ticks(sc, d, k == 1 ? 1u : (k - 2u) * m + 2u, tick);
+        rcs_scenario_apply_ticks(sc, d, k == first ? (k - 1u) * m + 1u : (k - 2u) * m + 2u, tick);
         if (d->io_read) d->io_read();
         run_schedule(d, sc, st, k, tick);
         if (d->io_write) d->io_write();

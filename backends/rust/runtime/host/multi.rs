@@ -199,6 +199,11 @@ fn open_dds(
     Err(2)
 }
 
+/// Nanoseconds from `start` to now (0 before it).
+fn since_ns(start: Instant) -> i64 {
+    i64::try_from(Instant::now().saturating_duration_since(start).as_nanos()).unwrap_or(i64::MAX)
+}
+
 fn stop_flag() -> bool {
     sys::stop_requested()
 }
@@ -295,7 +300,13 @@ pub fn run(
     let m = mc.ticks.get(me).copied().unwrap_or(1);
     let stop_tick = sc.map_or(0, Scenario::stop_tick);
     let mut line = String::new();
-    let mut k: u64 = 0;
+    // A CPU that joins a running run (DDS, started again) begins at the
+    // first cycle whose release is still ahead.
+    let first = match start {
+        Some(s) if !opt.lockstep && since_ns(s) > period => (since_ns(s) / period) as u64 + 2,
+        _ => 1,
+    };
+    let mut k: u64 = first - 1;
     while let Some(start) = start {
         k += 1;
         let tick = (k - 1) * m + 1;
@@ -357,7 +368,11 @@ pub fn run(
         }
         link.next_release(t + period);
         if let Some(s) = sc {
-            let lo = if k == 1 { 1 } else { (k - 2) * m + 2 };
+            let lo = if k == first {
+                (k - 1) * m + 1
+            } else {
+                (k - 2) * m + 2
+            };
             s.apply_ticks(design, lo, tick, Some(mc.ctrls_here));
         }
         design.io_read();
