@@ -17,7 +17,8 @@
  *     changes with the layout, so two builds that disagree never match;
  *   - one keyed topic `rcs/<design>/control`, an instance per CPU: its run
  *     state, the last cycle it published when it stopped, its next release
- *     (lockstep) and the instant it was ready (the start barrier).
+ *     (lockstep), the instant it was ready (the start barrier) and the
+ *     run's start (a CPU started again joins the running timeline).
  * QoS: reliable; history KEEP_LAST 4 (the shared memory's ring: a reader
  * released at t must still find the sample of deadline <= t when the writer
  * has already published the next one); durability TRANSIENT_LOCAL (a late
