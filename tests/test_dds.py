@@ -415,3 +415,17 @@ def test_a_killed_cpu_started_again_resumes_the_exchange(dds_builds, rust_dds_bu
     after = [j for j in plan if j["t"] >= back_at + 200_000_000]
     assert after and all(j["ctrl"]["AXIS"]["fields"]["pos_age"] <= 50_000_000 for j in after)
     assert len({j["gm"]["x_pos"] for j in after}) > 3
+
+
+def test_cmake_builds_the_dds_programs(dds_env, tmp_path):
+    env, domain = dds_env
+    out = tmp_path / "relay"
+    generate(RELAY, "c", out, "--transport", "dds")
+    for cmd in (["cmake", "-S", ".", "-B", "build"], ["cmake", "--build", "build"]):
+        r = subprocess.run(cmd, cwd=out, capture_output=True, text=True)
+        assert r.returncode == 0, r.stdout + r.stderr
+    scn, trace = MC / "relay_run.scn", tmp_path / "t.jsonl"
+    r = subprocess.run([str(out / "build" / "run_relay"), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(scn), "--trace", str(trace)],
+                       capture_output=True, text=True, timeout=60, env=env, stdin=subprocess.DEVNULL)
+    assert r.returncode == 0, r.stderr
+    assert trace.read_bytes() == sim_trace(RELAY, scn, tmp_path)
