@@ -36,7 +36,7 @@ from pathlib import Path
 import pytest
 
 from c_build import first_difference, generate
-from test_multicpu_targets import CASES, RELAY, TWOCPU, cpu_pids, sim_trace
+from test_multicpu_targets import C_CONFIGS, CASES, RELAY, TWOCPU, cpu_pids, sim_trace
 
 from rcsc import cli
 
@@ -62,18 +62,19 @@ def dds_env(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def dds_builds(tmp_path_factory):
-    """design -> the folder of its `--transport dds` C build (gcc -O2, no warning)."""
+    """(design, config) -> the folder of its `--transport dds` C build (no warning)."""
     base = tmp_path_factory.mktemp("dds_c")
-    cache: dict[Path, Path] = {}
+    cache: dict[tuple[Path, str], Path] = {}
 
-    def get(design: Path) -> Path:
-        if design not in cache:
-            out = base / design.stem
+    def get(design: Path, config: str = "gcc-O2") -> Path:
+        if (design, config) not in cache:
+            out = base / f"{design.stem}-{config}"
             generate(design, "c", out, "--transport", "dds")
-            r = subprocess.run(["make", "-s", "CC=gcc", "CFLAGS=-O2 -Werror"], cwd=out, capture_output=True, text=True)
+            cc, cflags, ldflags = C_CONFIGS[config]
+            r = subprocess.run(["make", "-s", f"CC={cc}", f"CFLAGS={cflags} -Werror", f"LDFLAGS={ldflags}"], cwd=out, capture_output=True, text=True)
             assert r.returncode == 0 and r.stderr == "", r.stderr
-            cache[design] = out
-        return cache[design]
+            cache[(design, config)] = out
+        return cache[(design, config)]
 
     return get
 
@@ -82,12 +83,14 @@ def launcher(folder: Path) -> Path:
     return next(p for p in folder.glob("run_*") if "." not in p.name)
 
 
+@pytest.mark.parametrize("config", list(C_CONFIGS))
 @pytest.mark.parametrize("case", CASES, ids=lambda c: f"{c[0].stem}/{c[1].stem}")
-def test_lockstep_trace_over_dds_equals_simulator(dds_builds, dds_env, case, tmp_path):
+def test_lockstep_trace_over_dds_equals_simulator(dds_builds, dds_env, case, config, tmp_path):
+    """gcc -O2, and clang under ASan/UBSan (and LeakSanitizer: nothing leaks)."""
     design, scn = case
     env, domain = dds_env
     trace = tmp_path / "dds.jsonl"
-    r = subprocess.run([str(launcher(dds_builds(design))), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(scn),
+    r = subprocess.run([str(launcher(dds_builds(design, config))), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(scn),
                         "--trace", str(trace)], capture_output=True, text=True, timeout=120, env=env, stdin=subprocess.DEVNULL)
     assert r.returncode == 0, r.stderr
     want = sim_trace(design, scn, tmp_path)
