@@ -36,7 +36,7 @@ from pathlib import Path
 import pytest
 
 from c_build import first_difference, generate
-from test_multicpu_targets import C_CONFIGS, CASES, RELAY, TWOCPU, cpu_pids, sim_trace
+from test_multicpu_targets import C_CONFIGS, CASES, RELAY, TWOCPU, _realtime_report, cpu_pids, sim_trace
 
 from rcsc import cli
 
@@ -432,3 +432,31 @@ def test_cmake_builds_the_dds_programs(dds_env, tmp_path):
                        capture_output=True, text=True, timeout=60, env=env, stdin=subprocess.DEVNULL)
     assert r.returncode == 0, r.stderr
     assert trace.read_bytes() == sim_trace(RELAY, scn, tmp_path)
+
+
+@pytest.mark.parametrize("target", ["c", "rust"])
+def test_realtime_run_over_dds_equals_simulator(dds_builds, rust_dds_builds, dds_env, target, tmp_path):
+    """2 s of a 10 ms design on the clock over DDS (the start agreed on the
+    control topic): the simulator's trace, unless the host missed a deadline
+    (then up to three runs, as for shared memory)."""
+    env, domain = dds_env
+    folder = dds_builds(TWOCPU) if target == "c" else rust_dds_builds(TWOCPU)
+    scn = tmp_path / "two_seconds.scn"
+    scn.write_text((MC / "twocpu_run.scn").read_text().replace("cycles 40", "cycles 200"))
+    reports = []
+    for attempt in range(3):
+        trace = tmp_path / f"rt{attempt}.jsonl"
+        t0 = time.monotonic()
+        r = subprocess.run([str(launcher(folder)), "--domain", domain, "--scenario", str(scn), "--trace", str(trace)],
+                           capture_output=True, text=True, timeout=120, env=env, stdin=subprocess.DEVNULL)
+        elapsed = time.monotonic() - t0
+        assert r.returncode == 0, r.stderr
+        assert elapsed >= 2.0, f"a real-time run of 200 ticks of 10 ms took {elapsed:.2f} s"
+        problems = _realtime_report(r.stderr)
+        if not problems:
+            want = sim_trace(TWOCPU, scn, tmp_path)
+            got = trace.read_bytes()
+            assert got == want, first_difference(got, want)
+            return
+        reports.append(f"run {attempt + 1}: " + "; ".join(problems))
+    pytest.fail("every real-time run missed its timing, so no trace was compared: " + " | ".join(reports))
