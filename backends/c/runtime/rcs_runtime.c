@@ -2015,9 +2015,11 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
     const int64_t period = d->period_ns;
     const uint64_t m = mc->ticks[me], stop_tick = rcs_scenario_stop_tick(sc);
     /* A CPU that joins a running run (DDS, started again) begins at the
-     * first cycle whose release is still ahead. */
+     * first cycle whose release is still ahead; the cycles it did not run
+     * count as overruns. */
     uint64_t first = 1;
     if (!opt->lockstep && start >= 0 && now_ns() - start > period) first = (uint64_t)((now_ns() - start) / period) + 2u;
+    tot->overruns += first - 1u;
     for (uint64_t k = first; start >= 0; k++) {
         const uint64_t tick = (k - 1u) * m + 1u;
         if (g_stop || (limit && tick > limit)) break;

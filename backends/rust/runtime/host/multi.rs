@@ -306,6 +306,7 @@ pub fn run(
         Some(s) if !opt.lockstep && since_ns(s) > period => (since_ns(s) / period) as u64 + 2,
         _ => 1,
     };
+    tot.overruns += first - 1;
     let mut k: u64 = first - 1;
     while let Some(start) = start {
         k += 1;
