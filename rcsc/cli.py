@@ -596,6 +596,10 @@ def _add_build_arguments(p: argparse.ArgumentParser) -> None:
         help="deployment build: leave the simulators out and call I/O hooks (a file of yours) instead",
     )
     p.add_argument("--deny-warnings", action="store_true", help="refuse to build on warnings too")
+    p.add_argument(
+        "--transport", choices=["shm", "dds"], default="shm",
+        help="how the buffers cross between the CPUs' processes: shared memory (one host, the default) or Cyclone DDS (any hosts)",
+    )
 
 
 def _run_build(args: argparse.Namespace) -> int:
@@ -610,7 +614,7 @@ def _run_build(args: argparse.Namespace) -> int:
         _report_to_stderr(result.diags)
         _write(sys.stderr, "error: no code is generated: warnings are denied\n")
         return EXIT_FINDINGS
-    target = backend.get_target(args.target)(result.model, backend.BuildOptions(exclude_simulators=args.exclude_simulators))
+    target = backend.get_target(args.target)(result.model, backend.BuildOptions(exclude_simulators=args.exclude_simulators, transport=args.transport))
     target.check(result.diags)
     if result.diags.has_errors():
         _report_to_stderr(result.diags)

@@ -719,6 +719,38 @@ that share a heartbeat). A target without that transport, divided rates
 them rather than emit a program that silently loses buffers, steps a
 controller every cycle or reads a made-up age.
 """),
+    ("E0820", _E, "the target has no such transport between CPUs", """
+`rcsc build --transport` chooses how the buffers that cross between CPUs
+travel from one CPU's process to another's: `shm` (POSIX shared memory, every
+CPU on one host, the default) or `dds` (Eclipse Cyclone DDS, the CPUs on any
+hosts of a network). A target builds only the transports it has (the C and
+Rust targets have both; a new target may start with shared memory alone);
+the others are refused rather than silently replaced by shared memory, which
+would not reach another host.
+
+Wrong (a target without the DDS transport):
+
+    rcsc build ship.rcs --target mytarget --transport dds -o build/ship
+
+Fixed:
+
+    rcsc build ship.rcs --target c --transport dds -o build/ship-c
+"""),
+    ("E0821", _E, "a transport between CPUs for a design with one CPU", """
+`--transport dds` carries the buffers that cross between the CPUs of a design
+to the other CPUs' processes. A design with one CPU has nothing to carry, and
+its Main Program would link a middleware it never uses: the option is refused.
+
+Wrong:
+
+    cpu MAIN heartbeat 10 ms { ... }
+    rcsc build cell.rcs --target c --transport dds -o build/cell
+
+Fixed:
+
+    cpu MAIN heartbeat 10 ms { ... }
+    rcsc build cell.rcs --target c -o build/cell
+"""),
     # ---- scenarios ----------------------------------------------------------
     ("E0700", _E, "operator command to a controller below the top", """
 Operator commands enter at the top of the hierarchy only (chain of command,

@@ -37,8 +37,8 @@ from rcsc.backends.rust.naming import RESERVED, RUST_KEYWORDS, RustNames
 
 C_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 ROOT = Path(__file__).resolve().parent.parent
-# The names the C runtime defines (rcs_num.h, rcs_runtime.h).
-RUNTIME_NAMES = set(re.findall(r"\b(?:rcs|RCS)_\w+", "".join((ROOT / "backends/c/runtime" / f).read_text() for f in ("rcs_num.h", "rcs_runtime.h"))))
+# The names the C runtime defines (rcs_num.h, rcs_runtime.h, rcs_link.h).
+RUNTIME_NAMES = set(re.findall(r"\b(?:rcs|RCS)_\w+", "".join((ROOT / "backends/c/runtime" / f).read_text() for f in ("rcs_num.h", "rcs_runtime.h", "rcs_link.h"))))
 
 # Names chosen to collide: separators, the generated code's own words, keywords, macros.
 HOSTILE = [

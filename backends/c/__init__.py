@@ -28,18 +28,21 @@ from rcsc.backends.c.target import CTarget, _strip_parens, c_comment, c_string
 from rcsc.sim.simulate import zero_value
 from rcsc.semantics.types import I32, EnumType, RecordType
 
-RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c", "rcs_shm.h", "rcs_shm.c")
+RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c", "rcs_link.h", "rcs_shm.h", "rcs_shm.c")
 LAUNCHER_FILES = ("rcs_launch.h", "rcs_launch.c")  # several CPUs only
+DDS_FILES = ("rcs_dds.h", "rcs_dds.c")  # several CPUs built with `--transport dds`
 
 
 @register
 class CBackend(CTarget):
     entry_files = ("Makefile", "CMakeLists.txt")
+    transports = ("shm", "dds")
 
     def files(self) -> list[OutFile]:
         d, n = self.design, self.n
         ctrls = built_controllers(d, self.options)
-        files = [OutFile(name, self.runtime_file(name)) for name in RUNTIME_FILES]
+        dds = self.options.transport == "dds" and len(d.cpus) > 1
+        files = [OutFile(name, self.runtime_file(name)) for name in RUNTIME_FILES + (DDS_FILES if dds else ())]
         common = self.common_names()
         files.append(OutFile(f"{n.p}.h", self.render("design.h.j2", **common, **self.design_header(ctrls))))
         files.append(OutFile(f"{n.p}.c", self.render("design.c.j2", **common, **self.design_source(ctrls))))
@@ -59,17 +62,17 @@ class CBackend(CTarget):
         for cpu in d.cpus.values():
             tables = main_tables(self, cpu, schedule_of(d, cpu, self.options), ctrls)
             main = f"{n.main_stem(cpu.name)}.c"
-            files.append(OutFile(main, self.render("main.c.j2", **common, cpu=cpu.name, main_file=main, cpu_string=c_string(cpu.name), deploy=deploy,
+            files.append(OutFile(main, self.render("main.c.j2", **common, cpu=cpu.name, main_file=main, cpu_string=c_string(cpu.name), deploy=deploy, dds=dds,
                                                    ctrl_headers=[f"{n.ctrl_stem(c.name)}.h" for c in ctrls], **tables)))
             binaries.append({"name": n.binary(cpu.name), "main": main})
-        sources = [f"{n.p}.c"] + [f"{n.ctrl_stem(c.name)}.c" for c in ctrls] + ([f"{n.p}_externs.c"] if externs else []) + ([f"{n.p}_io.c"] if deploy else []) + ["rcs_runtime.c", "rcs_shm.c"]
+        sources = [f"{n.p}.c"] + [f"{n.ctrl_stem(c.name)}.c" for c in ctrls] + ([f"{n.p}_externs.c"] if externs else []) + ([f"{n.p}_io.c"] if deploy else []) + ["rcs_runtime.c", "rcs_shm.c"] + (["rcs_dds.c"] if dds else [])
         launcher = None
         if len(d.cpus) > 1:
             files += [OutFile(name, self.runtime_file(name)) for name in LAUNCHER_FILES]
             files.append(OutFile(f"run_{n.p}.c", self.render("run.c.j2", **common, cpus=", ".join(c_string(c) for c in d.cpus),
                                                              bins=", ".join(c_string(n.binary(c)) for c in d.cpus))))
             launcher = {"name": f"run_{n.p}", "main": f"run_{n.p}.c", "objects": f"run_{n.p}.o rcs_launch.o"}
-        build = {"p": n.p, "lib": f"{n.p}__controllers", "sources": sources, "binaries": binaries, "launcher": launcher}
+        build = {"p": n.p, "lib": f"{n.p}__controllers", "sources": sources, "binaries": binaries, "launcher": launcher, "dds": dds}
         files.append(OutFile("Makefile", self.render("Makefile.j2", **build)))
         files.append(OutFile("CMakeLists.txt", self.render("CMakeLists.txt.j2", **build)))
         return files

@@ -161,7 +161,9 @@ def multi_tables(tg: CTarget, cpu: m.Cpu, ctrls: list[m.Controller]) -> dict:
             stamp = f"offsetof({buffers}, {member}.head.stamp)"
         rows.append(f"{{{names.index(x.writer_cpu)}u, UINT64_C({hex(readers)}), offsetof({buffers}, {member}), sizeof buf.{member}, {stamp}}}, /* {x.kind} {tg.comment(x.name)} */")
     gm_names = list(d.gm)
+    wire = wire_tables(tg) if tg.options.transport == "dds" else None
     return {
+        "wire": wire,
         "names": ", ".join(c_string(n) for n in names),
         "ticks": ", ".join(f"{cpu_ticks(d, n)}u" for n in names),
         "crossings": rows,
@@ -179,5 +181,60 @@ def multi_tables(tg: CTarget, cpu: m.Cpu, ctrls: list[m.Controller]) -> dict:
             f"{len(cpu_gm(d, cpu.name))}u",
             "ctrls_here" if any(c.cpu == cpu.name for c in ctrls) else "NULL",
             f"{sum(1 for c in ctrls if c.cpu == cpu.name)}u",
+            "&rcs_dds_transport" if tg.options.transport == "dds" else "&rcs_shm_transport",
+            "wire" if wire else "NULL",
         ],
     }
+
+
+# The wire kind of each scalar type (rcs_runtime.h, RCS_W_*).
+_WIRE_KIND = {"bool": "RCS_W_BOOL", "i32": "RCS_W_I32", "u32": "RCS_W_U32", "i64": "RCS_W_I64", "f64": "RCS_W_F64", "duration": "RCS_W_I64"}
+
+
+def _leaves(tg: CTarget, path: str, t) -> list[tuple[str, str]]:
+    """The scalars of a value at `path` in the buffers struct, in the order of
+    the canonical encoding: a record's fields one after the other, an enum as
+    its member index."""
+    if isinstance(t, EnumType):
+        return [(path, "RCS_W_ENUM")]
+    if isinstance(t, RecordType):
+        return [leaf for n, ft in t.fields for leaf in _leaves(tg, f"{path}.{tg.ident(n)}", ft)]
+    return [(path, _WIRE_KIND[t.name])]
+
+
+def wire_tables(tg: CTarget) -> dict:
+    """The canonical encoding of each crossing buffer, for the DDS transport:
+    the same bytes a Rust CPU sends (little-endian scalars, an enum as its
+    index in 8 bytes, records flattened; a command buffer's head then every
+    verb's arguments; a status buffer's head then its fields), so C and Rust
+    CPUs of one design interoperate.  A command's arguments are read back
+    only for the verb the command carries (they share a union in C)."""
+    d, n = tg.design, tg.n
+    buffers = n.fixed("buffers")
+    arrays, rows = [], []
+    for i, x in enumerate(d.crossings):
+        leaves: list[tuple[str, str, str]] = []  # path, kind, guard (verb number or "")
+        if x.kind == "gm":
+            leaves = [(p, k, "") for p, k in _leaves(tg, f"gm.{tg.ident(x.name)}", d.gm[x.name].type)]
+        elif x.kind == "cmd":
+            member = n.buffer_member(x.name, "cmd")
+            c = d.controllers[x.name]
+            leaves = [(f"{member}.head.serial", "RCS_W_U32", ""), (f"{member}.head.verb", "RCS_W_I32", "")]
+            for number, (vname, v) in enumerate(c.verbs.items(), 1):
+                for q in v.params:
+                    leaves += [(p, k, str(number)) for p, k in _leaves(tg, f"{member}.args.{tg.ident(vname)}.{tg.ident(q.name)}", q.type)]
+        else:
+            member = n.buffer_member(x.name, "status")
+            c = d.controllers[x.name]
+            leaves = [(f"{member}.head.{h}", "RCS_W_U32" if h == "echo_serial" else "RCS_W_I32", "") for h in ("echo_serial", "status", "verb", "state", "rule", "error_code")]
+            leaves += [(p, k, "") for fname, v in c.status_fields.items() for p, k in _leaves(tg, f"{member}.f.{tg.ident(fname)}", v.type)]
+        name = f"wire_{i}"
+        cmd_verb = f"offsetof({buffers}, {n.buffer_member(x.name, 'cmd')}.head.verb)" if x.kind == "cmd" else ""
+        if leaves:
+            arrays.append(f"static const rcs_leaf {name}[] = {{")
+            for p, k, guard in leaves:
+                g = f"{cmd_verb}, {guard}" if guard else "RCS_NO_STAMP, 0"
+                arrays.append(f"    {{offsetof({buffers}, {p}), {g}, {k}}},")
+            arrays.append("};")
+        rows.append(f"{{{name if leaves else 'NULL'}, {len(leaves)}u}}, /* {x.kind} {tg.comment(x.name)} */")
+    return {"arrays": arrays, "rows": rows}

@@ -73,6 +73,7 @@ EXPR_ALLOWS = [
 @register
 class RustBackend(RustTarget):
     entry_files = ("Cargo.toml",)
+    transports = ("shm", "dds")
 
     def files(self) -> list[OutFile]:
         from rcsc.backends.rust.tables import main_program
@@ -85,7 +86,8 @@ class RustBackend(RustTarget):
         files: list[OutFile] = []
         ctrl_files = [OutFile(f"src/{self.module(c)}.rs", self.render("ctrl.rs.j2", **self.controller(c))) for c in ctrls]
         launcher = f"run_{self.crate}" if len(d.cpus) > 1 else None
-        files.append(OutFile("Cargo.toml", self.render("Cargo.toml.j2", crate=self.crate, design=d.name, launcher=launcher,
+        dds = self.options.transport == "dds" and len(d.cpus) > 1
+        files.append(OutFile("Cargo.toml", self.render("Cargo.toml.j2", crate=self.crate, design=d.name, launcher=launcher, dds=dds,
                                                                   bins=[{"name": self.n.binary(c.name), "path": f"src/bin/{self.n.bin_stem(c.name)}.rs"} for c in d.cpus.values()])))
         if launcher:
             launch = Call("std::process::exit", [Call("host::launch", [
@@ -109,6 +111,17 @@ class RustBackend(RustTarget):
             files.append(OutFile("src/io.rs", self.render("io.rs.j2", crate=self.crate), user=True))
         for name in self.host_files():
             files.append(OutFile(f"host/{name}", self.runtime_text(f"host/{name}")))
+        if dds:
+            files += self.dds_crate()
+        return files
+
+    def dds_crate(self) -> list[OutFile]:
+        """rcs_dds/: the safe wrapper crate around the C target's DDS transport
+        (its C files copied from the C runtime, compiled by the crate's build.rs)."""
+        files = [OutFile(f"rcs_dds/{name}", self.runtime_text(f"rcs_dds/{name}")) for name in ("Cargo.toml", "build.rs", "src/lib.rs")]
+        c_runtime = resources.files("rcsc.backends.c").joinpath("runtime")
+        for name in ("rcs_dds.c", "rcs_dds.h", "rcs_link.h", "rcs_shm.h"):
+            files.append(OutFile(f"rcs_dds/c/{name}", c_runtime.joinpath(name).read_text(encoding="utf-8")))
         return files
 
     # ---- runtime ------------------------------------------------------------------------

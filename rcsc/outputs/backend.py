@@ -69,6 +69,9 @@ def get_target(name: str) -> type["Target"]:
 @dataclass
 class BuildOptions:
     exclude_simulators: bool = False
+    # How the buffers cross between the CPUs' processes: "shm" (POSIX shared
+    # memory, one host) or "dds" (Eclipse Cyclone DDS, any hosts).
+    transport: str = "shm"
 
 
 @dataclass
@@ -383,6 +386,8 @@ class Target:
     # Builds several CPUs (a transport between their processes), divided
     # rates and Global Memory stamps; a target without them refuses such designs.
     multi_cpu = False
+    # The transports (BuildOptions.transport) this target can generate.
+    transports: tuple[str, ...] = ("shm",)
     MAX_CPUS = 64  # the transport keeps one bit per reading CPU in a 64-bit word
 
     def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
@@ -395,6 +400,7 @@ class Target:
     def check(self, diags: Diagnostics) -> None:
         """Add diagnostics for designs this target cannot build."""
         cpus = list(self.design.cpus.values())
+        self.check_transport(diags)
         if self.multi_cpu:
             if len(cpus) > self.MAX_CPUS:
                 d = diags.add(
@@ -420,6 +426,22 @@ class Target:
                 diags.add("E0800", c.period_span or c.name_span, f"the {self.name} target steps every controller every cycle; `{c.name}` has a period", "divided rate")
         for _, age in _gm_ages(self.design):
             diags.add("E0800", age.span, f"the {self.name} target keeps no stamps of Global Memory for `age({age.name})`", "age of Global Memory")
+
+    def check_transport(self, diags: Diagnostics) -> None:
+        """`--transport`: one this target generates, for a design with buffers to carry."""
+        transport = self.options.transport
+        cpus = list(self.design.cpus.values())
+        if transport == "shm" or not cpus:
+            return
+        if transport not in self.transports:
+            d = diags.add("E0820", cpus[0].name_span,
+                          f"the {self.name} target cannot exchange buffers over `{transport}`; it has {', '.join(self.transports)}",
+                          "the CPUs of this design")
+            d.with_note("`--transport dds` is for the C target (`rcsc targets`)")
+        elif len(cpus) == 1:
+            d = diags.add("E0821", cpus[0].name_span,
+                          f"`--transport {transport}` carries buffers between CPUs, and this design has one CPU", "the only CPU")
+            d.with_note("leave `--transport` out, or place the controllers on several CPUs")
 
     # ---- comments ------------------------------------------------------------------
 

@@ -688,7 +688,8 @@ static void usage(FILE *o, const char *prog, const rcs_design *d) {
             prog, d->design ? d->design : "?", d->cpu ? d->cpu : "?", (double)d->period_ns / 1000.0);
     if (d->multi)
         fputs("One CPU of a multi-CPU design (start them all with the launcher, run_<design>):\n"
-              "  --run ID          the run shared by the CPUs (names the shared memory)\n"
+              "  --run ID          the run shared by the CPUs (names the shared memory or DDS partition)\n"
+              "  --domain N        the DDS domain id (a build with --transport dds; default: from the design's name)\n"
               "  --lockstep        wait for each sample the CPU reads: the simulator's trace, no clock\n"
               "  --cycles N, the scenario's cycles and `at N` count base ticks (the shortest heartbeat)\n",
               o);
@@ -788,11 +789,13 @@ typedef struct {
     int fast, realtime, no_timing, no_console, help, lockstep;
     uint64_t cycles; /* 0: not given */
     const char *scenario, *trace, *run;
+    long domain; /* --domain: the DDS domain id, -1: not given */
 } options;
 
 /* Returns 1, or 0 after a message on stderr. */
 static int parse_options(int argc, char **argv, options *o) {
     memset(o, 0, sizeof *o);
+    o->domain = -1;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *val = NULL;
         const char *eq = strchr(a, '=');
@@ -811,7 +814,7 @@ static int parse_options(int argc, char **argv, options *o) {
             o->lockstep = 1;
         else if ((IS("--help") || IS("-h")) && !val)
             o->help = 1;
-        else if (IS("--cycles") || IS("--scenario") || IS("--trace") || IS("--run")) {
+        else if (IS("--cycles") || IS("--scenario") || IS("--trace") || IS("--run") || IS("--domain")) {
             if (!val) {
                 if (i + 1 >= argc) {
                     fprintf(stderr, "rcs: %s needs a value\n", a);
@@ -828,6 +831,13 @@ static int parse_options(int argc, char **argv, options *o) {
                 o->scenario = val;
             } else if (IS("--run")) {
                 o->run = val;
+            } else if (IS("--domain")) {
+                uint64_t dom = 0;
+                if (!(strcmp(val, "0") == 0 || parse_count(val, &dom)) || dom > 232u) {
+                    fprintf(stderr, "rcs: --domain needs a DDS domain id from 0 to 232, not `%s`\n", val);
+                    return 0;
+                }
+                o->domain = (long)dom;
             } else {
                 o->trace = val;
             }
@@ -911,10 +921,85 @@ static void run_schedule(const rcs_design *d, const rcs_scenario *sc, step_stats
 
 static size_t round8(size_t n) { return (n + 7u) / 8u * 8u; }
 
-/* The shared-memory layout, the same in every CPU's process: per CPU its
+/* ---- the canonical encoding (rcs_wire) ---- */
+
+static size_t leaf_width(int kind) {
+    return kind == RCS_W_BOOL ? 1u : kind == RCS_W_I32 || kind == RCS_W_U32 ? 4u : 8u;
+}
+
+/* Bytes of crossing i on the wire: its canonical encoding, or its bytes. */
+static size_t wire_size(const rcs_multi *mc, size_t i) {
+    if (mc->wire == NULL) return mc->crossings[i].size;
+    size_t n = 0;
+    for (size_t j = 0; j < mc->wire[i].n_leaves; j++) n += leaf_width(mc->wire[i].leaves[j].kind);
+    return n;
+}
+
+static void put_le(unsigned char *p, uint64_t v, size_t n) {
+    for (size_t i = 0; i < n; i++) p[i] = (unsigned char)(v >> (8u * i));
+}
+
+static uint64_t get_le(const unsigned char *p, size_t n) {
+    uint64_t v = 0;
+    for (size_t i = 0; i < n; i++) v |= (uint64_t)p[i] << (8u * i);
+    return v;
+}
+
+/* The scalars of crossing i from the buffers at `b` into `out`. */
+static void encode_leaves(const rcs_wire *w, const unsigned char *b, unsigned char *out) {
+    for (size_t j = 0; j < w->n_leaves; j++) {
+        const rcs_leaf *l = &w->leaves[j];
+        const size_t n = leaf_width(l->kind);
+        uint64_t v = 0;
+        if (l->kind == RCS_W_BOOL) {
+            unsigned char c;
+            memcpy(&c, b + l->offset, 1u);
+            v = c != 0u;
+        } else if (l->kind == RCS_W_I32 || l->kind == RCS_W_U32) {
+            uint32_t u;
+            memcpy(&u, b + l->offset, sizeof u);
+            v = u;
+        } else if (l->kind == RCS_W_ENUM) {
+            int32_t e;
+            memcpy(&e, b + l->offset, sizeof e);
+            v = (uint64_t)(int64_t)e;
+        } else {
+            memcpy(&v, b + l->offset, sizeof v);
+        }
+        put_le(out, v, n);
+        out += n;
+    }
+}
+
+/* Back into the buffers at `b`; a command's arguments only for its verb. */
+static void decode_leaves(const rcs_wire *w, unsigned char *b, const unsigned char *in) {
+    for (size_t j = 0; j < w->n_leaves; j++) {
+        const rcs_leaf *l = &w->leaves[j];
+        const size_t n = leaf_width(l->kind);
+        const uint64_t v = get_le(in, n);
+        in += n;
+        if (l->guard != RCS_NO_STAMP) {
+            int32_t verb;
+            memcpy(&verb, b + l->guard, sizeof verb);
+            if (verb != l->verb) continue;
+        }
+        if (l->kind == RCS_W_BOOL) {
+            unsigned char c = v != 0u;
+            memcpy(b + l->offset, &c, 1u);
+        } else if (l->kind == RCS_W_I32 || l->kind == RCS_W_U32 || l->kind == RCS_W_ENUM) {
+            uint32_t u = (uint32_t)v;
+            memcpy(b + l->offset, &u, sizeof u);
+        } else {
+            memcpy(b + l->offset, &v, sizeof v);
+        }
+    }
+}
+
+/* The sample layout, the same in every CPU's process: per CPU its
  * heartbeat, the CPUs that read it and its sample size; at[i]: where
  * crossing i sits in its writer's sample (its bytes rounded up to 8, then
- * its stamp when it has one). */
+ * its stamp when it has one; in the canonical encoding always a stamp, 0
+ * for none, as a Rust CPU lays it out). */
 static void sample_layout(const rcs_design *d, rcs_shm_cpu *cpus, size_t *at) {
     const rcs_multi *mc = d->multi;
     for (size_t c = 0; c < mc->n_cpus; c++) {
@@ -926,7 +1011,7 @@ static void sample_layout(const rcs_design *d, rcs_shm_cpu *cpus, size_t *at) {
         const rcs_crossing *x = &mc->crossings[i];
         rcs_shm_cpu *w = &cpus[x->writer];
         at[i] = w->payload_size;
-        w->payload_size += round8(x->size) + (x->stamp != RCS_NO_STAMP ? 8u : 0u);
+        w->payload_size += round8(wire_size(mc, i)) + (x->stamp != RCS_NO_STAMP || mc->wire ? 8u : 0u);
         w->readers |= x->readers;
     }
 }
@@ -939,13 +1024,18 @@ static void pack_sample(const rcs_design *d, const size_t *at, unsigned char *sa
     for (size_t i = 0; i < mc->n_crossings; i++) {
         const rcs_crossing *x = &mc->crossings[i];
         if (x->writer != mc->self) continue;
-        memcpy(sample + at[i], b + x->offset, x->size);
+        uint64_t st = 0;
         if (x->stamp != RCS_NO_STAMP) {
-            uint64_t st;
             memcpy(&st, b + x->stamp, sizeof st);
             if (st != 0) st += mc->ticks[mc->self];
-            memcpy(sample + at[i] + round8(x->size), &st, sizeof st);
         }
+        if (mc->wire) {
+            encode_leaves(&mc->wire[i], b, sample + at[i]);
+            put_le(sample + at[i] + round8(wire_size(mc, i)), st, 8u);
+            continue;
+        }
+        memcpy(sample + at[i], b + x->offset, x->size);
+        if (x->stamp != RCS_NO_STAMP) memcpy(sample + at[i] + round8(x->size), &st, sizeof st);
     }
 }
 
@@ -956,6 +1046,14 @@ static void unpack_sample(const rcs_design *d, const size_t *at, size_t writer, 
     for (size_t i = 0; i < mc->n_crossings; i++) {
         const rcs_crossing *x = &mc->crossings[i];
         if (x->writer != writer || !((x->readers >> mc->self) & 1u)) continue;
+        if (mc->wire) {
+            decode_leaves(&mc->wire[i], b, sample + at[i]);
+            if (x->stamp != RCS_NO_STAMP) {
+                uint64_t st = get_le(sample + at[i] + round8(wire_size(mc, i)), 8u);
+                memcpy(b + x->stamp, &st, sizeof st);
+            }
+            continue;
+        }
         memcpy(b + x->offset, sample + at[i], x->size);
         if (x->stamp != RCS_NO_STAMP) memcpy(b + x->stamp, sample + at[i] + round8(x->size), sizeof(uint64_t));
     }
@@ -965,6 +1063,33 @@ typedef struct {
     uint64_t cycles, overruns, missing;
     int64_t max_work;
 } run_totals;
+
+/* ---- the shared-memory transport (rcs_shm.h) behind rcs_transport ---- */
+
+static void *shm_open_link(const rcs_link_spec *spec, FILE *err) {
+    char name[256];
+    if (!rcs_shm_name(name, sizeof name, spec->design, spec->run)) return NULL;
+    return rcs_shm_open(name, spec->cpus, spec->n_cpus, spec->self, err);
+}
+static int64_t shm_start(void *l, int64_t lead_ns, int64_t timeout_ns, int (*stop)(void)) {
+    return rcs_shm_start(l, lead_ns, timeout_ns, stop);
+}
+static void shm_publish(void *l, uint64_t k, const void *payload) { rcs_shm_publish(l, k, payload); }
+static uint64_t shm_fetch(void *l, size_t writer, int64_t release, uint64_t have, void *payload, int *missing) {
+    return rcs_shm_fetch(l, writer, release, have, payload, missing);
+}
+static int shm_wait_published(void *l, size_t writer, int64_t release, int (*stop)(void)) {
+    return rcs_shm_wait_published(l, writer, release, stop);
+}
+static int shm_wait_readers(void *l, uint64_t k, int (*stop)(void)) { return rcs_shm_wait_readers(l, k, stop); }
+static void shm_next_release(void *l, int64_t release) { rcs_shm_next_release(l, release); }
+static void shm_set_state(void *l, int state) { rcs_shm_set_state(l, state); }
+static void shm_close(void *l) { rcs_shm_close(l, 1); }
+
+const rcs_transport rcs_shm_transport = {
+    "shared memory", shm_open_link, shm_start, shm_publish, shm_fetch, shm_wait_published, shm_wait_readers,
+    shm_next_release, shm_set_state, shm_close,
+};
 
 /* One CPU of a multi-CPU design: cycle k is released at (k - 1) * period
  * after the shared start; it takes the other CPUs' newest samples whose
@@ -987,8 +1112,21 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
     rcs_shm_cpu *cpus = xcalloc(mc->n_cpus, sizeof *cpus);
     size_t *at = xcalloc(mc->n_crossings + 1u, sizeof *at);
     sample_layout(d, cpus, at);
-    rcs_shm *shm = rcs_shm_open(name, cpus, mc->n_cpus, me, stderr);
-    if (shm == NULL) {
+    const rcs_transport *xp = mc->transport ? mc->transport : &rcs_shm_transport;
+    /* In the canonical encoding the transport sees the sizes on the wire and a stamp for every buffer. */
+    rcs_crossing *wx = xcalloc(mc->n_crossings + 1u, sizeof *wx);
+    for (size_t i = 0; i < mc->n_crossings; i++) {
+        wx[i] = mc->crossings[i];
+        if (mc->wire) {
+            wx[i].size = wire_size(mc, i);
+            wx[i].stamp = 0;
+        }
+    }
+    const rcs_link_spec spec = {d->design, opt->run, mc->cpu_names, cpus, mc->n_cpus, me, wx, at,
+                                mc->n_crossings, opt->domain, opt->lockstep};
+    void *link = xp->open(&spec, stderr);
+    if (link == NULL) {
+        free(wx);
         free(cpus);
         free(at);
         return 2;
@@ -999,7 +1137,7 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
     for (size_t w = 0; w < mc->n_cpus; w++) theirs[w] = xcalloc(1, cpus[w].payload_size + 1u);
 
     int status = 0, state = RCS_SHM_FINISHED;
-    const int64_t start = rcs_shm_start(shm, opt->lockstep ? 0 : 100000000, INT64_C(10000000000), stop_flag);
+    const int64_t start = xp->start(link, opt->lockstep ? 0 : 100000000, INT64_C(10000000000), stop_flag);
     if (start < 0) {
         if (!g_stop) {
             fprintf(stderr, "rcs: CPU %s: not every CPU of %s started within 10 s\n", d->cpu, d->design);
@@ -1009,7 +1147,13 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
     }
     const int64_t period = d->period_ns;
     const uint64_t m = mc->ticks[me], stop_tick = rcs_scenario_stop_tick(sc);
-    for (uint64_t k = 1; start >= 0; k++) {
+    /* A CPU that joins a running run (DDS, started again) begins at the
+     * first cycle whose release is still ahead; the cycles it did not run
+     * count as overruns. */
+    uint64_t first = 1;
+    if (!opt->lockstep && start >= 0 && now_ns() - start > period) first = (uint64_t)((now_ns() - start) / period) + 2u;
+    tot->overruns += first - 1u;
+    for (uint64_t k = first; start >= 0; k++) {
         const uint64_t tick = (k - 1u) * m + 1u;
         if (g_stop || (limit && tick > limit)) break;
         if (stop_tick && tick >= stop_tick) {
@@ -1024,7 +1168,7 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
         const int64_t t0 = now_ns();
         for (size_t w = 0; w < mc->n_cpus; w++) {
             if (w == me || !((cpus[w].readers >> me) & 1u)) continue;
-            if (opt->lockstep && rcs_shm_wait_published(shm, w, t, stop_flag) != 0) {
+            if (opt->lockstep && xp->wait_published(link, w, t, stop_flag) != 0) {
                 if (!g_stop) {
                     fprintf(stderr, "rcs: CPU %s: CPU %s failed or is gone\n", d->cpu, mc->cpu_names[w]);
                     status = 1;
@@ -1033,21 +1177,21 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
                 goto done;
             }
             int miss = 0;
-            uint64_t got = rcs_shm_fetch(shm, w, t, have[w], theirs[w], &miss);
+            uint64_t got = xp->fetch(link, w, t, have[w], theirs[w], &miss);
             tot->missing += (uint64_t)miss;
             if (got != have[w]) {
                 have[w] = got;
                 unpack_sample(d, at, w, theirs[w]);
             }
         }
-        rcs_shm_next_release(shm, t + period);
-        rcs_scenario_apply_ticks(sc, d, k == 1 ? 1u : (k - 2u) * m + 2u, tick);
+        xp->next_release(link, t + period);
+        rcs_scenario_apply_ticks(sc, d, k == first ? (k - 1u) * m + 1u : (k - 2u) * m + 2u, tick);
         if (d->io_read) d->io_read();
         run_schedule(d, sc, st, k, tick);
         if (d->io_write) d->io_write();
         if (trace) rcs_trace_line_cpu(trace, d, k, t);
         pack_sample(d, at, mine);
-        if (opt->lockstep && rcs_shm_wait_readers(shm, k, stop_flag) != 0) {
+        if (opt->lockstep && xp->wait_readers(link, k, stop_flag) != 0) {
             if (!g_stop) {
                 fprintf(stderr, "rcs: CPU %s: a CPU that reads it failed or is gone\n", d->cpu);
                 status = 1;
@@ -1055,15 +1199,16 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
             state = RCS_SHM_FAILED;
             goto done;
         }
-        rcs_shm_publish(shm, k, mine);
+        xp->publish(link, k, mine);
         tot->cycles = k;
         const int64_t t1 = now_ns();
         if (t1 - t0 > tot->max_work) tot->max_work = t1 - t0;
         if (opt->lockstep ? t1 - t0 > period : t1 > start + t + period) tot->overruns++;
     }
 done:
-    rcs_shm_set_state(shm, state);
-    rcs_shm_close(shm, 1);
+    xp->set_state(link, state);
+    xp->close(link);
+    free(wx);
     for (size_t w = 0; w < mc->n_cpus; w++) free(theirs[w]);
     free(theirs);
     free(have);
@@ -1089,6 +1234,10 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
         fputs("rcs: a CPU of a multi-CPU design runs on its heartbeat or, without a clock, with --lockstep (not "
               "--fast)\n",
               stderr);
+        return 2;
+    }
+    if (opt.domain >= 0 && (d->multi == NULL || d->multi->transport == NULL || d->multi->transport == &rcs_shm_transport)) {
+        fprintf(stderr, "rcs: --domain is for the CPUs of a design built with `--transport dds`\n");
         return 2;
     }
     if (d->multi == NULL && (opt.lockstep || opt.run)) {

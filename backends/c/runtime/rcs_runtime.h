@@ -19,6 +19,7 @@
 #include <stdio.h>
 
 #include "rcs_num.h"
+#include "rcs_link.h"
 #include "rcs_shm.h"
 
 /* Storage of each kind: bool, int32_t, int64_t, uint32_t, double,
@@ -92,17 +93,23 @@ typedef struct {
     uint64_t divider;        /* steps on the cycles k with (k - 1) % divider == 0 (0 counts as 1) */
 } rcs_ctrl;
 
-/* No stamp: a command buffer, or Global Memory when the design reads no age of it. */
-#define RCS_NO_STAMP ((size_t)-1)
 
-/* A buffer that one CPU writes and others read (each keeps its own copy). */
+/* The canonical encoding of a crossing buffer (the DDS transport, so that C
+ * and Rust CPUs interoperate): its scalars in order, each little-endian in
+ * its width (bool 1 byte, i32/u32 4, i64/f64/duration 8, an enum's member
+ * index in 8).  A leaf with a guard is a command's argument: it is read
+ * back only when the int32_t at `guard` (the command's verb) is `verb`. */
+enum { RCS_W_BOOL = 1, RCS_W_I32, RCS_W_U32, RCS_W_I64, RCS_W_F64, RCS_W_ENUM };
 typedef struct {
-    size_t writer;    /* CPU index */
-    uint64_t readers; /* bit r: CPU r reads it */
-    size_t offset;    /* the buffer in the buffers struct */
-    size_t size;
-    size_t stamp;     /* offset of its stamp (uint64_t tick) in the buffers struct, or RCS_NO_STAMP */
-} rcs_crossing;
+    size_t offset; /* in the buffers struct */
+    size_t guard;  /* offset of the verb it belongs to, or RCS_NO_STAMP */
+    int32_t verb;
+    int kind;      /* RCS_W_* */
+} rcs_leaf;
+typedef struct {
+    const rcs_leaf *leaves;
+    size_t n_leaves;
+} rcs_wire;
 
 /* What a CPU of a multi-CPU design knows about the others. */
 typedef struct {
@@ -117,6 +124,8 @@ typedef struct {
     size_t n_gm_here;
     const size_t *ctrls_here;        /* the controllers placed on this CPU */
     size_t n_ctrls_here;
+    const rcs_transport *transport;  /* how the samples cross */
+    const rcs_wire *wire;            /* per crossing, its canonical encoding; NULL: its bytes as they are */
 } rcs_multi;
 
 typedef struct {

@@ -257,6 +257,8 @@ struct Options {
     scenario: Option<String>,
     trace: Option<String>,
     run: Option<String>,
+    /// `--domain`: the DDS domain id (a build with `--transport dds`).
+    domain: Option<u8>,
 }
 
 fn usage(prog: &str, d: &DesignDesc) -> String {
@@ -278,7 +280,8 @@ fn usage(prog: &str, d: &DesignDesc) -> String {
         us(d.period_ns)
     ) + if d.multi.is_some() {
         "One CPU of a multi-CPU design (start them all with the launcher, run_<design>):\n  \
-         --run ID          the run shared by the CPUs (names the shared memory)\n  \
+         --run ID          the run shared by the CPUs (names the shared memory or DDS partition)\n  \
+         --domain N        the DDS domain id (a build with --transport dds; default: from the design's name)\n  \
          --lockstep        wait for each sample the CPU reads: the simulator's trace, no clock\n  \
          --cycles N, the scenario's cycles and `at N` count base ticks (the shortest heartbeat)\n"
     } else {
@@ -311,7 +314,7 @@ fn parse_options(args: &[String]) -> Result<Options, String> {
             "--no-console" if val.is_none() => o.no_console = true,
             "--lockstep" if val.is_none() => o.lockstep = true,
             "--help" | "-h" if val.is_none() => o.help = true,
-            "--cycles" | "--scenario" | "--trace" | "--run" => {
+            "--cycles" | "--scenario" | "--trace" | "--run" | "--domain" => {
                 if val.is_none() {
                     match it.next() {
                         Some(v) => val = Some(v.clone()),
@@ -330,6 +333,18 @@ fn parse_options(args: &[String]) -> Result<Options, String> {
                     },
                     "--scenario" => o.scenario = Some(val),
                     "--run" => o.run = Some(val),
+                    "--domain" => match val
+                        .parse::<u8>()
+                        .ok()
+                        .filter(|&d| d <= 232 && val.bytes().all(|b| b.is_ascii_digit()))
+                    {
+                        Some(d) => o.domain = Some(d),
+                        None => {
+                            return Err(format!(
+                                "rcs: --domain needs a DDS domain id from 0 to 232, not `{val}`"
+                            ))
+                        }
+                    },
                     _ => o.trace = Some(val),
                 }
             }
@@ -547,6 +562,10 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
     }
     if d.multi.is_some() && opt.fast && !opt.lockstep {
         say!("rcs: a CPU of a multi-CPU design runs on its heartbeat or, without a clock, with --lockstep (not --fast)");
+        return 2;
+    }
+    if opt.domain.is_some() && (d.multi.is_none() || !multi::DDS) {
+        say!("rcs: --domain is for the CPUs of a design built with `--transport dds`");
         return 2;
     }
     if d.multi.is_none() && (opt.lockstep || opt.run.is_some()) {

@@ -16,7 +16,7 @@
 
 use super::shm::{segment_name, Shm, ShmCpu, FAILED, FINISHED, STOPPED};
 use super::{run_schedule, sleep_until, sys, trace_line_cpu};
-use super::{HostDesign, Options, Scenario, StepStats, Value};
+use super::{HostDesign, MultiDesc, Options, Scenario, StepStats, Value};
 use std::io::Write;
 use std::time::{Duration, Instant};
 
@@ -79,6 +79,131 @@ fn round8(n: usize) -> usize {
     n.div_ceil(8) * 8
 }
 
+/// Whether this build exchanges the samples over DDS (`--transport dds`:
+/// the crate `rcs_dds`, a safe wrapper of the C target's rcs_dds.c) rather
+/// than shared memory.
+pub const DDS: bool = cfg!(feature = "dds");
+
+/// The exchange between the CPUs' processes: the same operations and rules
+/// over shared memory (shm.rs) or DDS.
+enum Exchange {
+    Shm(Shm),
+    #[cfg(feature = "dds")]
+    Dds(rcs_dds::Link),
+}
+
+impl Exchange {
+    fn start(&mut self, lead: Duration, timeout: Duration) -> Option<Instant> {
+        match self {
+            Exchange::Shm(s) => s.start(lead, timeout, &stop_flag),
+            #[cfg(feature = "dds")]
+            Exchange::Dds(l) => l.start(lead, timeout, stop_flag),
+        }
+    }
+    fn publish(&mut self, k: u64, payload: &[u8]) {
+        match self {
+            Exchange::Shm(s) => s.publish(k, payload),
+            #[cfg(feature = "dds")]
+            Exchange::Dds(l) => l.publish(k, payload),
+        }
+    }
+    fn fetch(&mut self, w: usize, t: i64, have: u64, sample: &mut [u8]) -> (u64, bool) {
+        match self {
+            Exchange::Shm(s) => s.fetch(w, t, have, sample),
+            #[cfg(feature = "dds")]
+            Exchange::Dds(l) => l.fetch(w, t, have, sample),
+        }
+    }
+    fn wait_published(&mut self, w: usize, t: i64) -> Result<(), ()> {
+        match self {
+            Exchange::Shm(s) => s.wait_published(w, t, &stop_flag),
+            #[cfg(feature = "dds")]
+            Exchange::Dds(l) => l.wait_published(w, t).map_err(|_| ()),
+        }
+    }
+    fn wait_readers(&mut self, k: u64) -> Result<(), ()> {
+        match self {
+            Exchange::Shm(s) => s.wait_readers(k, &stop_flag),
+            #[cfg(feature = "dds")]
+            Exchange::Dds(l) => l.wait_readers(k).map_err(|_| ()),
+        }
+    }
+    fn next_release(&mut self, release: i64) {
+        match self {
+            Exchange::Shm(s) => s.next_release(release),
+            #[cfg(feature = "dds")]
+            Exchange::Dds(l) => l.next_release(release),
+        }
+    }
+    fn finish(self, state: u64) {
+        match self {
+            Exchange::Shm(s) => {
+                s.set_state(state);
+                s.unlink();
+            }
+            #[cfg(feature = "dds")]
+            Exchange::Dds(mut l) => l.set_state(state),
+        }
+    }
+}
+
+/// The DDS link of this CPU (a build with `--transport dds`).
+#[cfg(feature = "dds")]
+fn open_dds(
+    design: &str,
+    opt: &Options,
+    mc: &MultiDesc,
+    cpus: &[ShmCpu],
+    at: &[(usize, usize)],
+) -> Result<Exchange, i32> {
+    let cpus: Vec<rcs_dds::Cpu> = cpus
+        .iter()
+        .map(|c| rcs_dds::Cpu {
+            period_ns: c.period_ns,
+            payload_size: c.payload_size,
+            readers: c.readers,
+        })
+        .collect();
+    let crossings: Vec<rcs_dds::Crossing> = mc
+        .crossings
+        .iter()
+        .zip(at)
+        .map(|(x, &(pos, len))| rcs_dds::Crossing {
+            writer: x.writer,
+            readers: x.readers,
+            size: len,
+            at: pos,
+        })
+        .collect();
+    let spec = rcs_dds::Spec {
+        design,
+        run: opt.run.as_deref().unwrap_or(""),
+        cpu_names: mc.cpu_names,
+        cpus: &cpus,
+        me: mc.me,
+        crossings: &crossings,
+        domain: opt.domain,
+        lockstep: opt.lockstep,
+    };
+    rcs_dds::Link::open(&spec).map(Exchange::Dds).ok_or(2)
+}
+
+#[cfg(not(feature = "dds"))]
+fn open_dds(
+    _design: &str,
+    _opt: &Options,
+    _mc: &MultiDesc,
+    _cpus: &[ShmCpu],
+    _at: &[(usize, usize)],
+) -> Result<Exchange, i32> {
+    Err(2)
+}
+
+/// Nanoseconds from `start` to now (0 before it).
+fn since_ns(start: Instant) -> i64 {
+    i64::try_from(Instant::now().saturating_duration_since(start).as_nanos()).unwrap_or(i64::MAX)
+}
+
 fn stop_flag() -> bool {
     sys::stop_requested()
 }
@@ -136,11 +261,15 @@ pub fn run(
         shapes.push(v);
     }
     let cpus: &'static [ShmCpu] = Box::leak(cpus.into_boxed_slice());
-    let mut shm = match Shm::open(&name, cpus, me) {
-        Ok(s) => s,
-        Err(message) => {
-            say!("rcs: {message}");
-            return Err(2);
+    let mut link = if DDS {
+        open_dds(d.design, opt, mc, cpus, &at)?
+    } else {
+        match Shm::open(&name, cpus, me) {
+            Ok(s) => Exchange::Shm(s),
+            Err(message) => {
+                say!("rcs: {message}");
+                return Err(2);
+            }
         }
     };
     let size = |c: usize| cpus.get(c).map_or(0, |c| c.payload_size);
@@ -155,7 +284,7 @@ pub fn run(
     } else {
         Duration::from_millis(100)
     };
-    let start = shm.start(lead, Duration::from_secs(10), &stop_flag);
+    let start = link.start(lead, Duration::from_secs(10));
     if start.is_none() {
         if !sys::stop_requested() {
             say!(
@@ -171,7 +300,14 @@ pub fn run(
     let m = mc.ticks.get(me).copied().unwrap_or(1);
     let stop_tick = sc.map_or(0, Scenario::stop_tick);
     let mut line = String::new();
-    let mut k: u64 = 0;
+    // A CPU that joins a running run (DDS, started again) begins at the
+    // first cycle whose release is still ahead.
+    let first = match start {
+        Some(s) if !opt.lockstep && since_ns(s) > period => (since_ns(s) / period) as u64 + 2,
+        _ => 1,
+    };
+    tot.overruns += first - 1;
+    let mut k: u64 = first - 1;
     while let Some(start) = start {
         k += 1;
         let tick = (k - 1) * m + 1;
@@ -196,14 +332,14 @@ pub fn run(
             if w == me || !reads {
                 continue;
             }
-            if opt.lockstep && shm.wait_published(w, t, &stop_flag).is_err() {
+            if opt.lockstep && link.wait_published(w, t).is_err() {
                 failed = Some(w);
                 break;
             }
             let (Some(sample), Some(held)) = (theirs.get_mut(w), have.get_mut(w)) else {
                 continue;
             };
-            let (got, missing) = shm.fetch(w, t, *held, sample);
+            let (got, missing) = link.fetch(w, t, *held, sample);
             tot.missing += u64::from(missing);
             if got != *held {
                 *held = got;
@@ -231,9 +367,13 @@ pub fn run(
             state = FAILED;
             break;
         }
-        shm.next_release(t + period);
+        link.next_release(t + period);
         if let Some(s) = sc {
-            let lo = if k == 1 { 1 } else { (k - 2) * m + 2 };
+            let lo = if k == first {
+                (k - 1) * m + 1
+            } else {
+                (k - 2) * m + 2
+            };
             s.apply_ticks(design, lo, tick, Some(mc.ctrls_here));
         }
         design.io_read();
@@ -264,7 +404,7 @@ pub fn run(
                 dst.copy_from_slice(&bytes);
             }
         }
-        if opt.lockstep && shm.wait_readers(k, &stop_flag).is_err() {
+        if opt.lockstep && link.wait_readers(k).is_err() {
             if !sys::stop_requested() {
                 say!("rcs: CPU {}: a CPU that reads it failed or is gone", d.cpu);
                 status = 1;
@@ -272,7 +412,7 @@ pub fn run(
             state = FAILED;
             break;
         }
-        shm.publish(k, &mine);
+        link.publish(k, &mine);
         tot.cycles = k;
         let work = i64::try_from(t0.elapsed().as_nanos()).unwrap_or(i64::MAX);
         tot.max_work = tot.max_work.max(work);
@@ -285,7 +425,6 @@ pub fn run(
             tot.overruns += 1;
         }
     }
-    shm.set_state(state);
-    shm.unlink();
+    link.finish(state);
     Ok((tot, status))
 }
