@@ -35,7 +35,7 @@ from pathlib import Path
 
 import pytest
 
-from c_build import first_difference, generate
+from c_build import event_file, first_difference, generate
 from test_multicpu_targets import C_CONFIGS, CASES, RELAY, TWOCPU, _realtime_report, cpu_pids, sim_trace
 
 from rcsc import cli
@@ -90,7 +90,7 @@ def test_lockstep_trace_over_dds_equals_simulator(dds_builds, dds_env, case, con
     design, scn = case
     env, domain = dds_env
     trace = tmp_path / "dds.jsonl"
-    r = subprocess.run([str(launcher(dds_builds(design, config))), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(scn),
+    r = subprocess.run([str(launcher(dds_builds(design, config))), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(event_file(design, scn)),
                         "--trace", str(trace)], capture_output=True, text=True, timeout=120, env=env, stdin=subprocess.DEVNULL)
     assert r.returncode == 0, r.stderr
     want = sim_trace(design, scn, tmp_path)
@@ -121,7 +121,7 @@ def test_cpus_in_separate_ipc_namespaces_give_the_simulators_trace(dds_builds, d
     procs, parts = [], []
     for cpu in ("slow", "fast"):  # declaration order
         parts.append(tmp_path / f"{cpu}.jsonl")
-        procs.append(start_cpu(folder, f"relay_{cpu}", "by-hand", env, domain, "--lockstep", "--no-timing", "--scenario", str(scn), "--trace", str(parts[-1])))
+        procs.append(start_cpu(folder, f"relay_{cpu}", "by-hand", env, domain, "--lockstep", "--no-timing", "--scenario", str(event_file(RELAY, scn)), "--trace", str(parts[-1])))
     for p in procs:
         _, err = p.communicate(timeout=60)
         assert p.returncode == 0, err
@@ -138,7 +138,7 @@ def test_two_runs_on_one_domain_never_mix(dds_builds, dds_env, tmp_path):
     runs = []
     for i in range(2):
         trace = tmp_path / f"run{i}.jsonl"
-        p = subprocess.Popen([str(launcher(folder)), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(scn), "--trace", str(trace)],
+        p = subprocess.Popen([str(launcher(folder)), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(event_file(TWOCPU, scn)), "--trace", str(trace)],
                              env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         runs.append((p, trace))
     want = sim_trace(TWOCPU, scn, tmp_path)
@@ -285,7 +285,7 @@ def test_rust_lockstep_trace_over_dds_equals_simulator(rust_dds_builds, dds_env,
     design, scn = case
     env, domain = dds_env
     trace = tmp_path / "rust-dds.jsonl"
-    r = subprocess.run([str(launcher(rust_dds_builds(design))), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(scn),
+    r = subprocess.run([str(launcher(rust_dds_builds(design))), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(event_file(design, scn)),
                         "--trace", str(trace)], capture_output=True, text=True, timeout=120, env=env, stdin=subprocess.DEVNULL)
     assert r.returncode == 0, r.stderr
     want = sim_trace(design, scn, tmp_path)
@@ -351,7 +351,7 @@ def test_c_and_rust_cpus_interoperate(dds_builds, rust_dds_builds, dds_env, case
         parts.append(tmp_path / f"{cpu}.jsonl")
         lang = first if i == 0 else other
         procs.append((lang, start_cpu(folders[lang], f"{name}_{cpu}", run, env, domain, "--lockstep", "--no-timing",
-                                      "--scenario", str(scn), "--trace", str(parts[-1]))))
+                                      "--scenario", str(event_file(design, scn)), "--trace", str(parts[-1]))))
     for lang, p in procs:
         _, err = p.communicate(timeout=120)
         assert p.returncode == 0, f"{lang}: {err}"
@@ -378,7 +378,7 @@ def test_a_killed_cpu_started_again_resumes_the_exchange(dds_builds, rust_dds_bu
     scn = tmp_path / "kill.scn"
     scn.write_text(KILL_SCN, encoding="utf-8")
     run = f"restart-{servo}-{os.getpid()}"
-    common = ("--scenario", str(scn), "--no-timing")
+    common = ("--scenario", str(event_file(design, scn)), "--no-timing")
     plan_trace, first_trace, again_trace = tmp_path / "plan.jsonl", tmp_path / "servo1.jsonl", tmp_path / "servo2.jsonl"
     planner = start_cpu(folders["c"], "machine_tool_PLAN_CPU", run, env, domain, *common, "--trace", str(plan_trace))
     first = start_cpu(folders[servo], "machine_tool_SERVO_CPU", run, env, domain, *common, "--trace", str(first_trace))
@@ -428,7 +428,7 @@ def test_cmake_builds_the_dds_programs(dds_env, tmp_path):
         r = subprocess.run(cmd, cwd=out, capture_output=True, text=True)
         assert r.returncode == 0, r.stdout + r.stderr
     scn, trace = MC / "relay_run.scn", tmp_path / "t.jsonl"
-    r = subprocess.run([str(out / "build" / "run_relay"), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(scn), "--trace", str(trace)],
+    r = subprocess.run([str(out / "build" / "run_relay"), "--lockstep", "--no-timing", "--domain", domain, "--scenario", str(event_file(RELAY, scn)), "--trace", str(trace)],
                        capture_output=True, text=True, timeout=60, env=env, stdin=subprocess.DEVNULL)
     assert r.returncode == 0, r.stderr
     assert trace.read_bytes() == sim_trace(RELAY, scn, tmp_path)
@@ -447,7 +447,7 @@ def test_realtime_run_over_dds_equals_simulator(dds_builds, rust_dds_builds, dds
     for attempt in range(3):
         trace = tmp_path / f"rt{attempt}.jsonl"
         t0 = time.monotonic()
-        r = subprocess.run([str(launcher(folder)), "--domain", domain, "--scenario", str(scn), "--trace", str(trace)],
+        r = subprocess.run([str(launcher(folder)), "--domain", domain, "--scenario", str(event_file(TWOCPU, scn)), "--trace", str(trace)],
                            capture_output=True, text=True, timeout=120, env=env, stdin=subprocess.DEVNULL)
         elapsed = time.monotonic() - t0
         assert r.returncode == 0, r.stderr
