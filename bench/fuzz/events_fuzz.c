@@ -18,8 +18,9 @@
  * Any breach calls abort(): libFuzzer writes the input as crash-<hash>.
  * Whether the Rust reader agrees is the replay step's job (fuzz_events.py).
  *
- * With -DPLANT_BUG the oracle also rejects a refused `bool` leaf (a
- * planted finding: tests/test_fuzz_readers.py shows it is reported).
+ * With -DPLANT_BUG the oracle also rejects the refusal of a malformed version
+ * number in the header (no seed has one: a planted finding that only a
+ * mutation reaches; tests/test_fuzz_readers.py shows it is reported).
  */
 #define main rcs_fixture_main
 #include "../../tests/c/runtime_fixture.c"
@@ -85,7 +86,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         if (end == msg + plen + 1 || line < 1 || line > lines || strncmp(end, ": error: ", 9) != 0)
             finding("a refusal names no line of the file", msg);
 #ifdef PLANT_BUG
-        if (strstr(msg, "does not fit the type `bool`") != NULL) finding("planted: a refused bool leaf", msg);
+        /* No seed has a malformed version number: only a mutation finds one. */
+        if (line == 1 && strstr(msg, "is not a decimal number") != NULL) finding("planted: a malformed version number", msg);
 #endif
     }
     free(msg);
