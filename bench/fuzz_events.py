@@ -126,6 +126,33 @@ def build(work: Path, plant_bug: bool) -> tuple[Path, Path, Path]:
     return harness, c_exe, work / "target" / "release" / "fixture"
 
 
+def rust_fuzz(work: Path, corpus: Path, args: list[str], here: Path) -> tuple[int, int, int]:
+    """cargo-fuzz on the Rust reader (bench/fuzz/rust/fuzz_targets/events.rs), on the same corpus.
+
+    Runs in the fixture crate's copy that build() made, as its `fuzz/` folder;
+    the copy's bin makes its design tables public for the target.  Returns
+    (runs, crashes, coverage).  The build is kept in build/fuzz-events-rust."""
+    crate = work / "rust_fixture"
+    shutil.copytree(ROOT / "bench" / "fuzz" / "rust", crate / "fuzz")
+    bin_rs = crate / "src" / "bin" / "fixture.rs"
+    text = bin_rs.read_text(encoding="utf-8")
+    for old, new in (("\nstatic DESIGN:", "\npub static DESIGN:"), ("\nmod host;", "\npub mod host;")):
+        assert old in text, old
+        text = text.replace(old, new, 1)
+    bin_rs.write_text(text, encoding="utf-8")
+    target = ROOT / "build" / "fuzz-events-rust"
+    env = dict(os.environ, CARGO_TERM_COLOR="never")
+    cmd = ["cargo", "+nightly", "fuzz", "run", "--target-dir", str(target), "events", str(corpus), "--",
+           "-timeout=2", "-rss_limit_mb=1024", "-max_len=4096", "-print_final_stats=1", f"-artifact_prefix={here}/rust-",
+           *args]
+    fz = subprocess.run(cmd, cwd=crate, env=env, capture_output=True, text=True)
+    log = fz.stderr
+    print(log[-6000:] if fz.returncode else log[-1000:], end="")
+    m = re.search(r"Done (\d+) runs", log) or re.search(r"stat::number_of_executed_units:\s*(\d+)", log)
+    cov = max((int(n) for n in re.findall(r"cov: (\d+)", log)), default=0)
+    return (int(m.group(1)) if m else 0), int(fz.returncode != 0), cov
+
+
 def compare(c_exe: Path, rust_exe: Path, files: list[Path], work: Path, out: Path) -> tuple[int, int]:
     """Runs each file through both Main Programs; (files compared, disagreements).
 
@@ -154,12 +181,13 @@ def main(argv: list[str]) -> int:
         print(f"wrote {len(list(CORPUS.iterdir()))} seeds to {CORPUS.relative_to(ROOT)}")
         return 0
     plant_bug = "--plant-bug" in args
+    rust = "--rust" in args
     keep = None
     if "--keep" in args:
         i = args.index("--keep")
         keep = Path(args[i + 1])
         del args[i:i + 2]
-    args = [a for a in args if a != "--plant-bug"]
+    args = [a for a in args if a not in ("--plant-bug", "--rust")]
     here = Path.cwd()
     work = Path(tempfile.mkdtemp(prefix="rcsc-fuzz-events-"))
     harness, c_exe, rust_exe = build(work, plant_bug)
@@ -184,8 +212,13 @@ def main(argv: list[str]) -> int:
     m = re.search(r"Done (\d+) runs", log) or re.search(r"stat::number_of_executed_units:\s*(\d+)", log)
     runs = int(m.group(1)) if m else 0
     cov = max((int(n) for n in re.findall(r"cov: (\d+)", log)), default=0)
-    findings = [p for p in here.iterdir() if re.match(r"(crash|timeout|oom|leak)-", p.name)]
-    crashes = int(fz.returncode != 0 or bool(findings))
+    crashes = int(fz.returncode != 0)
+    if rust:
+        r_runs, r_crashes, r_cov = rust_fuzz(work, corpus, args, here)
+        print(f"rust: inputs {r_runs}, crashes {r_crashes}, cov {r_cov}")
+        runs, crashes = runs + r_runs, crashes + r_crashes
+    findings = [p for p in here.iterdir() if re.match(r"(rust-)?(crash|timeout|oom|leak)-", p.name)]
+    crashes = max(crashes, len(findings))
     files = sorted(corpus.iterdir())
     n, dis = compare(c_exe, rust_exe, files, work, here)
     print(f"inputs {runs}, corpus {n}, crashes {crashes}, disagreements {dis}, cov {cov}")
