@@ -22,7 +22,8 @@ files of tests/event_cases.py; `--write-seeds` regenerates it (the suite
 checks it is current).
 
     python bench/fuzz_events.py -runs=2000 -seed=1            # the suite's slice
-    nice python bench/fuzz_events.py -max_total_time=300      # a longer run
+    python bench/fuzz_events.py --rust -runs=2000 -seed=1     # the same, then cargo-fuzz on the Rust reader
+    nice python bench/fuzz_events.py --rust -max_total_time=150   # a longer run (each reader 150 s)
     python bench/fuzz_events.py --write-seeds
 
 Any further arguments are libFuzzer's.  A finding is written as
@@ -30,8 +31,13 @@ Any further arguments are libFuzzer's.  A finding is written as
 is copied there as `disagree-<name>`.  The last line is a summary:
 `inputs N, corpus M, crashes C, disagreements D, cov K`; the exit status is 0
 only when C and D are 0.  `--plant-bug` builds the harness with a planted
-oracle failure (a refused `bool` leaf): the suite uses it to show that the
-harness really reports what it finds.  `--keep DIR` keeps the corpus there.
+oracle failure (the refusal of a malformed version number in the header,
+which no seed has): the suite uses it to show that the
+harness really reports what it finds (with --rust, the Rust target has the same
+planted failure).  `--rust` adds a cargo-fuzz run on the Rust reader
+(bench/fuzz/rust, `cargo +nightly fuzz`; needs `cargo install cargo-fuzz` and
+the nightly toolchain) on the same corpus, before the comparison.
+`--keep DIR` keeps the corpus there.
 """
 
 from __future__ import annotations
@@ -126,7 +132,7 @@ def build(work: Path, plant_bug: bool) -> tuple[Path, Path, Path]:
     return harness, c_exe, work / "target" / "release" / "fixture"
 
 
-def rust_fuzz(work: Path, corpus: Path, args: list[str], here: Path) -> tuple[int, int, int]:
+def rust_fuzz(work: Path, corpus: Path, args: list[str], here: Path, plant_bug: bool) -> tuple[int, int, int]:
     """cargo-fuzz on the Rust reader (bench/fuzz/rust/fuzz_targets/events.rs), on the same corpus.
 
     Runs in the fixture crate's copy that build() made, as its `fuzz/` folder;
@@ -142,12 +148,17 @@ def rust_fuzz(work: Path, corpus: Path, args: list[str], here: Path) -> tuple[in
     bin_rs.write_text(text, encoding="utf-8")
     target = ROOT / "build" / "fuzz-events-rust"
     env = dict(os.environ, CARGO_TERM_COLOR="never")
+    if plant_bug:
+        env["RCSC_FUZZ_PLANT_BUG"] = "1"
     cmd = ["cargo", "+nightly", "fuzz", "run", "--target-dir", str(target), "events", str(corpus), "--",
            "-timeout=2", "-rss_limit_mb=1024", "-max_len=4096", "-print_final_stats=1", f"-artifact_prefix={here}/rust-",
            *args]
     fz = subprocess.run(cmd, cwd=crate, env=env, capture_output=True, text=True)
     log = fz.stderr
     print(log[-6000:] if fz.returncode else log[-1000:], end="")
+    for line in log.splitlines():  # the panic's message comes before a long stack
+        if "panicked at" in line or "FINDING" in line:
+            print(line)
     m = re.search(r"Done (\d+) runs", log) or re.search(r"stat::number_of_executed_units:\s*(\d+)", log)
     cov = max((int(n) for n in re.findall(r"cov: (\d+)", log)), default=0)
     return (int(m.group(1)) if m else 0), int(fz.returncode != 0), cov
@@ -214,7 +225,7 @@ def main(argv: list[str]) -> int:
     cov = max((int(n) for n in re.findall(r"cov: (\d+)", log)), default=0)
     crashes = int(fz.returncode != 0)
     if rust:
-        r_runs, r_crashes, r_cov = rust_fuzz(work, corpus, args, here)
+        r_runs, r_crashes, r_cov = rust_fuzz(work, corpus, args, here, plant_bug)
         print(f"rust: inputs {r_runs}, crashes {r_crashes}, cov {r_cov}")
         runs, crashes = runs + r_runs, crashes + r_crashes
     findings = [p for p in here.iterdir() if re.match(r"(rust-)?(crash|timeout|oom|leak)-", p.name)]

@@ -2,9 +2,10 @@
 
 libFuzzer runs a fixed number of inputs from a fixed seed on the C reader
 (ASan and UBSan, the harness's oracle), starting from the seed corpus in
-bench/fuzz/corpus/; then every input of the resulting corpus goes through
-the C and the Rust Main Programs of the fixture design, which must agree
-(exit status, message, first-cycle trace).  Longer campaigns are the
+bench/fuzz/corpus/, then cargo-fuzz as many on the Rust reader on the same
+corpus; then every input of the resulting corpus goes through the C and the
+Rust Main Programs of the fixture design, which must agree (exit status,
+message, first-cycle trace).  Longer campaigns are the
 script's job (`nice python bench/fuzz_events.py -max_total_time=300`).  A
 planted bug shows that the harness reports what its oracle finds, and a
 forged pair of programs that the comparison reports a disagreement.
@@ -51,11 +52,13 @@ def test_seed_corpus_is_current():
 
 
 def test_bounded_fuzz_run_finds_nothing(tmp_path: Path):
-    proc = _fuzz(tmp_path, f"-runs={RUNS}", "-seed=1")
+    proc = _fuzz(tmp_path, "--rust", f"-runs={RUNS}", "-seed=1")
     out = proc.stdout + proc.stderr
     assert proc.returncode == 0, out[-6000:]
     s = _summary(out)
-    assert s["inputs"] == RUNS and s["crashes"] == 0 and s["disagreements"] == 0, s
+    assert s["inputs"] == 2 * RUNS and s["crashes"] == 0 and s["disagreements"] == 0, s
+    rust = re.search(r"^rust: inputs (\d+), crashes 0, cov (\d+)$", out, re.M)
+    assert rust and int(rust.group(1)) == RUNS and int(rust.group(2)) > 150, out[-3000:]
     # libFuzzer saw the reader's branches and kept inputs beyond the seeds, and all were compared.
     assert s["cov"] > 150, s
     assert s["corpus"] > len(_module().seeds()), s
@@ -63,14 +66,18 @@ def test_bounded_fuzz_run_finds_nothing(tmp_path: Path):
 
 
 def test_a_planted_bug_is_reported(tmp_path: Path):
-    proc = _fuzz(tmp_path, "--plant-bug", f"-runs={RUNS}", "-seed=1")
+    """Both harnesses (libFuzzer on C, cargo-fuzz on Rust) find the planted failure by mutation."""
+    proc = _fuzz(tmp_path, "--rust", "--plant-bug", f"-runs={RUNS}", "-seed=1")
     out = proc.stdout + proc.stderr
-    assert proc.returncode != 0 and "FINDING: planted: a malformed version number" in out, out[-3000:]
-    assert _summary(out)["crashes"] == 1
+    assert proc.returncode != 0 and "events_fuzz: FINDING: planted: a malformed version number" in out, out[-3000:]
+    assert re.search(r"panicked at fuzz_targets/events.rs.*\n.*FINDING: planted: a malformed version number", out), out[-3000:]
+    assert _summary(out)["crashes"] == 2
+    crashes = list(tmp_path.glob("crash-*")) + list(tmp_path.glob("rust-crash-*"))
+    assert len(crashes) == 2, out[-3000:]
+    for crash in crashes:
+        first = crash.read_bytes().split(b"\n")[0].split(b" ")
+        assert first[0] == b"rcsc-events" and len(first) >= 2 and not first[1].isdigit(), first
     crashes = list(tmp_path.glob("crash-*"))
-    assert len(crashes) == 1, out[-3000:]
-    first = crashes[0].read_bytes().split(b"\n")[0].split(b" ")
-    assert first[0] == b"rcsc-events" and len(first) == 4 and not first[1].isdigit(), first
     # The crash file replays on its own, and only with the planted bug.
     replay = _fuzz(tmp_path, "--plant-bug", str(crashes[0]))
     assert replay.returncode != 0 and "FINDING: planted" in replay.stdout + replay.stderr

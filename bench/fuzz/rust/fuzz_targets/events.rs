@@ -4,7 +4,9 @@
 //! (overflow checks are on): a refusal names a line of the file (1 to the
 //! line count + 1) and is one line of printable ASCII; an accepted file has
 //! 1..2^32-1 cycles; two readings agree.  Whether the C reader agrees is the
-//! replay step's job (bench/fuzz_events.py).
+//! replay step's job (bench/fuzz_events.py).  With RCSC_FUZZ_PLANT_BUG set
+//! (`fuzz_events.py --plant-bug`) the oracle also rejects the refusal of a
+//! malformed version number, as the C harness does: a planted finding.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -15,6 +17,8 @@ use libfuzzer_sys::fuzz_target;
 mod fixture_bin;
 
 use fixture_bin::host::Scenario;
+
+static PLANT_BUG: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
 
 fn outcome(data: &[u8]) -> Result<u64, (usize, String)> {
     Scenario::parse(data, &fixture_bin::DESIGN)
@@ -31,6 +35,11 @@ fuzz_target!(|data: &[u8]| {
             let lines = 1 + data.iter().filter(|&&b| b == b'\n').count();
             assert!((1..=lines).contains(&line), "line {line} of {lines}: {message}");
             assert!(message.bytes().all(|b| (0x20..=0x7e).contains(&b)), "{message:?}");
+            let planted = *PLANT_BUG.get_or_init(|| std::env::var_os("RCSC_FUZZ_PLANT_BUG").is_some());
+            assert!(
+                !(planted && line == 1 && message.ends_with("is not a decimal number")),
+                "FINDING: planted: a malformed version number"
+            );
         }
     }
 });
