@@ -201,6 +201,13 @@ def main(argv: list[str]) -> int:
     args = [a for a in args if a not in ("--plant-bug", "--rust")]
     here = Path.cwd()
     work = Path(tempfile.mkdtemp(prefix="rcsc-fuzz-events-"))
+    try:
+        return _fuzz(args, here, work, keep, plant_bug, rust)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def _fuzz(args: list[str], here: Path, work: Path, keep: Path | None, plant_bug: bool, rust: bool) -> int:
     harness, c_exe, rust_exe = build(work, plant_bug)
     replay = [a for a in args if not a.startswith("-")]
     if replay:  # rerun findings: libFuzzer runs the files given, then compare them
@@ -233,7 +240,6 @@ def main(argv: list[str]) -> int:
     files = sorted(corpus.iterdir())
     n, dis = compare(c_exe, rust_exe, files, work, here)
     print(f"inputs {runs}, corpus {n}, crashes {crashes}, disagreements {dis}, cov {cov}")
-    shutil.rmtree(work, ignore_errors=True)
     return 1 if crashes or dis else 0
 
 

@@ -28,14 +28,28 @@ fn outcome(data: &[u8]) -> Result<u64, (usize, String)> {
 
 fuzz_target!(|data: &[u8]| {
     let first = outcome(data);
-    assert_eq!(first, outcome(data), "two readings of the same bytes differ");
+    assert_eq!(
+        first,
+        outcome(data),
+        "two readings of the same bytes differ"
+    );
     match first {
-        Ok(cycles) => assert!((1..=u64::from(u32::MAX)).contains(&cycles), "cycles {cycles}"),
+        Ok(cycles) => assert!(
+            (1..=u64::from(u32::MAX)).contains(&cycles),
+            "cycles {cycles}"
+        ),
         Err((line, message)) => {
             let lines = 1 + data.iter().filter(|&&b| b == b'\n').count();
-            assert!((1..=lines).contains(&line), "line {line} of {lines}: {message}");
-            assert!(message.bytes().all(|b| (0x20..=0x7e).contains(&b)), "{message:?}");
-            let planted = *PLANT_BUG.get_or_init(|| std::env::var_os("RCSC_FUZZ_PLANT_BUG").is_some());
+            assert!(
+                (1..=lines).contains(&line),
+                "line {line} of {lines}: {message}"
+            );
+            assert!(
+                message.bytes().all(|b| (0x20..=0x7e).contains(&b)),
+                "{message:?}"
+            );
+            let planted =
+                *PLANT_BUG.get_or_init(|| std::env::var_os("RCSC_FUZZ_PLANT_BUG").is_some());
             assert!(
                 !(planted && line == 1 && message.ends_with("is not a decimal number")),
                 "FINDING: planted: a malformed version number"
