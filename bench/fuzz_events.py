@@ -209,9 +209,10 @@ def main(argv: list[str]) -> int:
 
 def _fuzz(args: list[str], here: Path, work: Path, keep: Path | None, plant_bug: bool, rust: bool) -> int:
     harness, c_exe, rust_exe = build(work, plant_bug)
+    henv = dict(os.environ, TMPDIR=str(work))  # the harness's input file goes with the work folder
     replay = [a for a in args if not a.startswith("-")]
     if replay:  # rerun findings: libFuzzer runs the files given, then compare them
-        fz = subprocess.run([str(harness), *args], cwd=here, capture_output=True, text=True)
+        fz = subprocess.run([str(harness), *args], cwd=here, capture_output=True, text=True, env=henv)
         print(fz.stderr[-4000:], end="")
         files = [Path(a) for a in replay]
         _n, dis = compare(c_exe, rust_exe, files, work, here)
@@ -224,7 +225,7 @@ def _fuzz(args: list[str], here: Path, work: Path, keep: Path | None, plant_bug:
     # -timeout: an input that takes over 2 s is a hang; -rss_limit_mb: a leak or a runaway allocation.
     cmd = [str(harness), "-timeout=2", "-rss_limit_mb=1024", "-max_len=4096", "-print_final_stats=1",
            *args, str(corpus)]
-    fz = subprocess.run(cmd, cwd=here, capture_output=True, text=True)
+    fz = subprocess.run(cmd, cwd=here, capture_output=True, text=True, env=henv)
     log = fz.stderr
     print(log[-6000:] if fz.returncode else log[-1500:], end="")
     m = re.search(r"Done (\d+) runs", log) or re.search(r"stat::number_of_executed_units:\s*(\d+)", log)
