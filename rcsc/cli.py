@@ -138,13 +138,16 @@ def _check(path: str, as_module: bool = False, cache: bool = False, replay: bool
         if hit is not None:
             return hit
     driver = _load_driver()
+    # `rcsc check` (replay) needs the findings only: the plans' syntax trees
+    # are freed as soon as they are converted.
+    keep_plans = not replay
     try:
         if cache:
             from rcsc.checks.cache import folder_for
 
-            result = driver.check_path(path, as_module=as_module, cache_dir=folder_for(path))
+            result = driver.check_path(path, as_module=as_module, cache_dir=folder_for(path), keep_plans=keep_plans)
         else:
-            result = driver.check_path(path, as_module=as_module)
+            result = driver.check_path(path, as_module=as_module, keep_plans=keep_plans)
     except driver.InputError as exc:
         raise UsageError(str(exc)) from exc
     if cache and replay:

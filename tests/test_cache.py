@@ -40,6 +40,12 @@ def _entries(folder: Path) -> list[Path]:
     return sorted(folder.glob("guards-*.json"))
 
 
+def _forget_findings(folder: Path) -> None:
+    """Delete the replayed checks (rcsc.checks.replay), so that the next run reads the guard entries."""
+    for p in folder.glob("result-*.json"):
+        p.unlink()
+
+
 def _fresh_check(path: Path, *extra: str) -> str:
     """`rcsc check` in a fresh process, as users run it (z3's state carries
     over between analyses in one process and can change which witness a
@@ -75,6 +81,7 @@ def test_the_cache_is_really_read(tmp_path: Path, capsys) -> None:
         doc["payload"] = "[]"
         doc["checksum"] = __import__("hashlib").sha256(b"[]").hexdigest()
         path.write_text(json.dumps(doc))
+    _forget_findings(tmp_path / cache.FOLDER)
     assert "W0515" not in _check(design, capsys)
 
 
@@ -102,6 +109,7 @@ def test_corrupt_entries_are_ignored_and_rewritten(tmp_path: Path, damage) -> No
     good = {p: p.read_text() for p in entries}
     for p in entries:
         p.write_text(damage(good[p]), encoding="utf-8", errors="surrogateescape")
+    _forget_findings(tmp_path / cache.FOLDER)
     assert _fresh_check(design) == reference
     for p in entries:  # rewritten: the same bytes as a clean run writes
         assert p.read_text() == good[p]

@@ -120,6 +120,36 @@ class Store:
             self.writable = False
 
 
+class MemoryStore:
+    """A `Store` in memory, for a long-lived process (the language server):
+    the same entries (kept as the JSON data `encode` makes), at most `limit`
+    of them (the oldest go first)."""
+
+    def __init__(self, limit: int = 50_000) -> None:
+        self.limit = limit
+        self.entries: dict[str, object] = {}
+        self.hits = self.misses = self.writes = 0
+
+    def get(self, key: str):
+        value = self.entries.get(key)
+        if value is None:
+            self.misses += 1
+        else:
+            self.hits += 1
+        return value
+
+    def put(self, key: str, value) -> None:
+        try:  # what the disk store could not hold is not held here either
+            json.dumps(value, allow_nan=False)
+        except (ValueError, TypeError):
+            return
+        self.entries.pop(key, None)
+        self.entries[key] = value
+        self.writes += 1
+        while len(self.entries) > self.limit:
+            del self.entries[next(iter(self.entries))]
+
+
 def digest(key) -> str:
     """The hex SHA-256 of a key made of tuples, strings, numbers and None."""
     return hashlib.sha256(repr(key).encode()).hexdigest()
