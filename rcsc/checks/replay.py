@@ -2,13 +2,14 @@
 
 `rcsc check` stores, next to the guard analysis (`rcsc.checks.cache`), the
 findings of each design it checked (namespace "result"), under a key made
-of the root file's path (as given and resolved), its text, whether it was
-checked as a module, the `RCSC_*` environment variables that tune the
-analysis and the version of rcsc (`cache.code_version`).  The entry lists
-every file the check read (the imports and the standard-library modules)
-with the SHA-256 of its text: a later run with the same key re-reads those
-files and replays the findings only when every one is unchanged, so the
-answer is the one a full check would give, byte for byte.  Anything else
+of the root file's path (as given and resolved), whether it was checked as
+a module and the `RCSC_*` environment variables that tune the analysis; the
+store adds the version of rcsc (`cache.code_version`).  One entry per root
+file: each full check overwrites it.  The entry lists every file the check
+read (the root, its imports and the standard-library modules) with the
+SHA-256 of its text: a later run re-reads those files and replays the
+findings only when every one is unchanged, so the answer is the one a full
+check would give, byte for byte.  Anything else
 (a changed import, a file that cannot be read, a corrupt entry) is a miss
 and the design is checked in full.
 
@@ -41,9 +42,10 @@ def _sha(text: str) -> str:
     return hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
 
 
-def key_of(path: str, as_module: bool, root_text: str) -> str:
+def key_of(path: str, as_module: bool) -> str:
+    """The key of the entry of the design `path`: one entry per root file (each check overwrites it)."""
     env = sorted((k, v) for k, v in os.environ.items() if k.startswith("RCSC_") and k != "RCSC_NO_CACHE")
-    return cache.digest(("replay", FORMAT, path, os.path.realpath(path), as_module, _sha(root_text), tuple(env)))
+    return cache.digest(("replay", FORMAT, path, os.path.realpath(path), as_module, tuple(env)))
 
 
 def _read_text(where: str) -> str | None:
@@ -183,7 +185,7 @@ def lookup(path: str, as_module: bool, folder: str) -> Replayed | None:
     text = _root_text(path)
     if text is None:
         return None  # the full check reports why
-    found = replay(cache.Store(folder, NAMESPACE), key_of(path, as_module, text), text)
+    found = replay(cache.Store(folder, NAMESPACE), key_of(path, as_module), text)
     if found is None:
         return None
     sources, diags = found
@@ -208,4 +210,4 @@ def remember(path: str, as_module: bool, folder: str, result) -> None:
         if not where:
             return
         files.append((f.source.path, where, f.source))
-    store(cache.Store(folder, NAMESPACE), key_of(path, as_module, result.files[0].source.text), files, result.diags)
+    store(cache.Store(folder, NAMESPACE), key_of(path, as_module), files, result.diags)
