@@ -24,12 +24,15 @@ from rcsc.cli import main
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ROOT / "tests" / "cases"
 
-# A design over two files with findings (W0515 with a witness) and clean plans.
+# A design over two files with findings (W0515 and W0524 with witnesses) and clean plans.
 MAIN = (CASES / "W0515_order_dependent.rcs").read_text(encoding="utf-8").replace(
     "gm level: i32 in 0..100 = 0 from env\n", 'import "lib/limits.rcs"\n\ngm level: i32 in 0..100 = 0 from env\n'
 )
 LIB = "module d.limits\n\nconst HIGH: i32 = 90\nconst LOW: i32 = 50\n"
 MAIN = MAIN.replace("level > 90 ", "level > HIGH").replace("level < 50 ", "level < LOW")
+# A value finding too (W0524: `level - LOW` leaves 0..10).
+MAIN = MAIN.replace("    reads level\n", "    reads level\n    local n: i32 in 0..10 = 0\n", 1)
+MAIN = MAIN.replace("E3: true         | S2  -> done;", "E3: true         | S2  -> done | n = level - LOW;", 1)
 
 
 @pytest.fixture(autouse=True)
@@ -60,7 +63,7 @@ def _results(folder: Path) -> list[Path]:
 def test_an_unchanged_design_is_replayed_without_the_front_end(tmp_path: Path) -> None:
     design = _write(tmp_path, MAIN, LIB)
     reference = _fresh(design, "--no-cache")
-    assert "W0515" in reference[1]
+    assert "W0515" in reference[1] and "W0524" in reference[1]
     assert _fresh(design) == reference  # checks and stores
     assert len(_results(tmp_path)) == 1
     script = (

@@ -34,10 +34,13 @@ def __getattr__(name: str):
 
 def check_model(design: "Design", diags: "Diagnostics", guard_options: "guards.Options | None" = None) -> None:
     """Run every check family; findings go to `diags`."""
-    from rcsc.checks import guards
+    from rcsc.checks import guards, values
 
     for family in _families():
         if family is guards:
             guards.check(design, diags, guard_options)
+        elif family is values:
+            # The value analysis keeps its results in the guard analysis's store.
+            values.check(design, diags, guard_options.store if guard_options is not None else None)
         else:
             family.check(design, diags)

@@ -1,9 +1,12 @@
 """Results kept between runs: a small on-disk store under `.rcsc-cache/`.
 
 `rcsc check` keeps the guard analysis of each plan shape (see
-`rcsc.checks.guards`) in the folder `.rcsc-cache/` next to the design's root
-file, so that a second run, or an editor re-checking after a change, only
-asks the solver about plans whose shape changed.  `--no-cache` (or
+`rcsc.checks.guards`) and the value analysis of each plan (see
+`rcsc.checks.values`) in the folder `.rcsc-cache/` next to the design's root
+file, so that a second run only asks the solver about plans that changed,
+and the findings of each design (`rcsc.checks.replay`), so that a run on
+unchanged files checks nothing.  The language server keeps the same entries
+in memory (`MemoryStore`).  `--no-cache` (or
 `RCSC_NO_CACHE=1`) turns it off; deleting the folder is always safe.
 
 Each entry is one JSON file named by the SHA-256 of its key.  The file
