@@ -125,7 +125,7 @@ def _load_driver() -> ModuleType:
 def _check(path: str, as_module: bool = False, cache: bool = False, replay: bool = False):
     """Run the front end on `path`; an unreadable root file is a usage error (exit 2).
 
-    With `cache`, the guard analysis uses the design's `.rcsc-cache/` folder;
+    With `cache`, the guard and value analyses use the design's `.rcsc-cache/` folder;
     with `replay` too, a design whose files are all unchanged since a check
     stored there answers with that check's findings (`rcsc.checks.replay`:
     findings only, no model, so only for `rcsc check`).
@@ -162,7 +162,7 @@ def _add_check_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--no-cache", action="store_true",
-        help="do not read or write the cache of guard analyses and findings (.rcsc-cache/ next to the design; also RCSC_NO_CACHE=1)",
+        help="do not read or write the cache of solver results and findings (.rcsc-cache/ next to the design; also RCSC_NO_CACHE=1)",
     )
     _add_report_arguments(p)
     p.add_argument("-q", "--quiet", action="store_true", help="print the findings only: no summary line, no notes")

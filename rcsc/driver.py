@@ -39,9 +39,10 @@ def check_path(
     """Load, analyse and check the design whose root file is `path` (or, with
     `as_module`, the module `path` on its own); `overlay` gives texts that
     replace files on disk (see `loader.path_to_files`).  With `cache_dir`
-    (see `rcsc.checks.cache`), results of the guard analysis are read from and
-    written to that folder; `guard_store` (a `cache.MemoryStore` that a
-    long-lived process keeps between checks) is used instead when given.  Without `keep_plans`, the syntax trees of the
+    (see `rcsc.checks.cache`), results of the guard and value analyses are
+    read from and written to that folder; `guard_store` (a
+    `cache.MemoryStore` that a long-lived process keeps between checks) is
+    used instead when given.  Without `keep_plans`, the syntax trees of the
     result lack the controllers' plans (freed early to save memory; for
     callers that need only the findings and the model, like `rcsc check`).
     """
