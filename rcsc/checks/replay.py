@@ -81,8 +81,8 @@ def _diag(d: Diagnostic, index: dict[int, int]) -> list:
 
 def store(store: cache.Store, key: str, files: list[tuple[str, str, object]], diags: Diagnostics) -> None:
     """Keep the findings `diags` of a check that read `files` [(display path, where, SourceFile)]
-    (`where`: the real path, or `<stdlib>/MODULE`).  Silently skipped when the
-    findings cannot be stored."""
+    (`where`: the real path of the file; for a standard-library module, that
+    of its resource).  Silently skipped when the findings cannot be stored."""
     if any(d.code in _UNSTORABLE_CODES for d in diags.items):
         return
     index = {id(src): i for i, (_, _, src) in enumerate(files)}
