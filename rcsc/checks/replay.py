@@ -195,12 +195,13 @@ def lookup(path: str, as_module: bool, folder: str) -> Replayed | None:
 
 def remember(path: str, as_module: bool, folder: str, result) -> None:
     """Store the findings of `result` (a `rcsc.driver.CheckResult` of the design `path`)."""
-    if cache.disabled_by_environment() or not result.files or not result.files[0].is_root:
+    loaded = getattr(result, "files", None)
+    if cache.disabled_by_environment() or not loaded or not loaded[0].is_root:
         return
     from rcsc.front.loader import stdlib_path
 
     files = []
-    for f in result.files:
+    for f in loaded:
         where = f.real
         if where.startswith("<stdlib>/"):
             res = stdlib_path(where[len("<stdlib>/"):])
