@@ -75,10 +75,11 @@ def _check_path(path: str, as_module: bool, overlay: dict[str, str] | None, cach
         add_hints(diags, None)
         return CheckResult(diags, None, files)
     design = ast_to_model(files, diags, release_plans=not keep_plans)
-    store = guard_store
+    store = value_store = guard_store  # a MemoryStore holds both analyses
     if store is None and cache_dir is not None and not cache.disabled_by_environment():
         store = cache.Store(cache_dir, "guards")
-    check_model(design, diags, guards.Options(store=store))
+        value_store = cache.Store(cache_dir, "values")
+    check_model(design, diags, guards.Options(store=store), value_store)
     # Unused suppressions are reported only when the checks all ran (errors
     # stop the guard analysis, whose findings an `allow` may be waiting for).
     suppress.apply([f.source for f in files], diags, report_unused=not diags.has_errors())

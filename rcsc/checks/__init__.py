@@ -32,15 +32,15 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def check_model(design: "Design", diags: "Diagnostics", guard_options: "guards.Options | None" = None) -> None:
-    """Run every check family; findings go to `diags`."""
+def check_model(design: "Design", diags: "Diagnostics", guard_options: "guards.Options | None" = None, value_store=None) -> None:
+    """Run every check family; findings go to `diags`.  `value_store` (a
+    `rcsc.checks.cache` store) keeps the value analysis between runs."""
     from rcsc.checks import guards, values
 
     for family in _families():
         if family is guards:
             guards.check(design, diags, guard_options)
         elif family is values:
-            # The value analysis keeps its results in the guard analysis's store.
-            values.check(design, diags, guard_options.store if guard_options is not None else None)
+            values.check(design, diags, value_store)
         else:
             family.check(design, diags)
