@@ -8,15 +8,21 @@ For each size it runs the `rcsc` command in fresh processes and prints CPU
 time (user + system), wall time and peak resident memory of:
 
   cold      no cache (`--no-cache`): everything computed;
-  warm      the second of two runs with the cache (`.rcsc-cache/`);
+  warm      the second of two runs with the cache (`.rcsc-cache/`): the
+            design is unchanged, so its stored findings are replayed
+            (rcsc.checks.replay);
   edit      a run with that warm cache after one rule of one controller was
-            edited (a re-check while working on the design).
+            edited (a re-check while working on the design): a full check
+            whose guard analysis comes from the cache.
 
 CPU time is what the goals are about: wall time on a shared machine says
 more about the neighbours than about rcsc.  Then it prints, per size, the
 in-process CPU time of each stage of one cold run (`rcsc.driver` step by
 step: reading and parsing, names and types, each check family; the guard
-analysis without cache).  --profile prints the top cProfile hotspots of one
+analysis without cache), and the CPU time of the language server's
+re-check after the same one-rule edit (in process, `driver.check_path` with
+the overlay and the server's in-memory guard store filled by a first
+check).  --profile prints the top cProfile hotspots of one
 in-process run of the largest size.
 
 Goals (200 controllers): cold <= 3 s CPU and <= 400 MiB, t(200)/t(100)
@@ -106,6 +112,19 @@ def stages(path: Path) -> dict[str, float]:
     return out
 
 
+def server_edit(path: Path) -> float:
+    """CPU seconds of the language server's re-check after one edit (in process, warm guard store)."""
+    from rcsc.checks import cache
+    from rcsc.driver import check_path
+
+    store = cache.MemoryStore()
+    check_path(str(path), guard_store=store)
+    edited = edit_one_rule(path.read_text(encoding="utf-8"))
+    t = time.process_time()
+    check_path(str(path), overlay={os.path.realpath(path): edited}, guard_store=store)
+    return time.process_time() - t
+
+
 def profile(path: Path, top: int) -> str:
     from rcsc.driver import check_path
 
@@ -169,6 +188,9 @@ def main(argv: list[str] | None = None) -> int:
                 breakdown[n] = stages(paths[n])
                 parts = "  ".join(f"{k} {v:.2f}" for k, v in breakdown[n].items())
                 print(f"{n:>11}: {parts}  total {sum(breakdown[n].values()):.2f}", flush=True)
+            print("\nlanguage server re-check after one edit (in process, warm guard store; CPU s):")
+            for n in sizes:
+                print(f"{n:>11}: {server_edit(paths[n]):.2f}", flush=True)
 
         print()
         if GOAL_CONTROLLERS in results:

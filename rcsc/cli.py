@@ -122,21 +122,36 @@ def _load_driver() -> ModuleType:
     return driver
 
 
-def _check(path: str, as_module: bool = False, cache: bool = False):
+def _check(path: str, as_module: bool = False, cache: bool = False, replay: bool = False):
     """Run the front end on `path`; an unreadable root file is a usage error (exit 2).
 
-    With `cache`, the guard analysis uses the design's `.rcsc-cache/` folder.
+    With `cache`, the guard and value analyses use the design's `.rcsc-cache/` folder;
+    with `replay` too, a design whose files are all unchanged since a check
+    stored there answers with that check's findings (`rcsc.checks.replay`:
+    findings only, no model, so only for `rcsc check`).
     """
+    if cache and replay:
+        from rcsc.checks import replay as replays
+        from rcsc.checks.cache import folder_for
+
+        hit = replays.lookup(path, as_module, folder_for(path))
+        if hit is not None:
+            return hit
     driver = _load_driver()
+    # `rcsc check` (replay) needs the findings only: the plans' syntax trees
+    # are freed as soon as they are converted.
+    keep_plans = not replay
     try:
         if cache:
             from rcsc.checks.cache import folder_for
 
-            result = driver.check_path(path, as_module=as_module, cache_dir=folder_for(path))
+            result = driver.check_path(path, as_module=as_module, cache_dir=folder_for(path), keep_plans=keep_plans)
         else:
-            result = driver.check_path(path, as_module=as_module)
+            result = driver.check_path(path, as_module=as_module, keep_plans=keep_plans)
     except driver.InputError as exc:
         raise UsageError(str(exc)) from exc
+    if cache and replay:
+        replays.remember(path, as_module, folder_for(path), result)
     return result
 
 
@@ -147,7 +162,7 @@ def _add_check_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--no-cache", action="store_true",
-        help="do not read or write the guard-analysis cache (.rcsc-cache/ next to the design; also RCSC_NO_CACHE=1)",
+        help="do not read or write the cache of solver results and findings (.rcsc-cache/ next to the design; also RCSC_NO_CACHE=1)",
     )
     _add_report_arguments(p)
     p.add_argument("-q", "--quiet", action="store_true", help="print the findings only: no summary line, no notes")
@@ -248,7 +263,7 @@ class _CheckRun:
         conf = self.config_for(path)
         self.checked.add(os.path.realpath(path))
         try:
-            result = _check(path, as_module, cache=not self.args.no_cache)
+            result = _check(path, as_module, cache=not self.args.no_cache, replay=True)
         except UsageError as exc:
             _error(str(exc))
             self.usage_problem = True

@@ -32,12 +32,19 @@ class CheckResult:
         return not self.diags.has_errors()
 
 
-def check_path(path: str, as_module: bool = False, overlay: dict[str, str] | None = None, cache_dir: str | None = None) -> CheckResult:
+def check_path(
+    path: str, as_module: bool = False, overlay: dict[str, str] | None = None, cache_dir: str | None = None, keep_plans: bool = True,
+    guard_store: cache.MemoryStore | None = None,
+) -> CheckResult:
     """Load, analyse and check the design whose root file is `path` (or, with
     `as_module`, the module `path` on its own); `overlay` gives texts that
     replace files on disk (see `loader.path_to_files`).  With `cache_dir`
-    (see `rcsc.checks.cache`), results of the guard analysis are read from and
-    written to that folder.
+    (see `rcsc.checks.cache`), results of the guard and value analyses are
+    read from and written to that folder; `guard_store` (a
+    `cache.MemoryStore` that a long-lived process keeps between checks) is
+    used instead when given.  Without `keep_plans`, the syntax trees of the
+    result lack the controllers' plans (freed early to save memory; for
+    callers that need only the findings and the model, like `rcsc check`).
     """
     # A compiler run allocates many long-lived objects and frees few: the
     # cyclic garbage collector would spend about half of a large design's
@@ -51,14 +58,15 @@ def check_path(path: str, as_module: bool = False, overlay: dict[str, str] | Non
     gc.disable()
     gc.unfreeze()
     try:
-        return _check_path(path, as_module, overlay, cache_dir)
+        return _check_path(path, as_module, overlay, cache_dir, keep_plans, guard_store)
     finally:
         gc.freeze()
         if was_enabled:
             gc.enable()
 
 
-def _check_path(path: str, as_module: bool, overlay: dict[str, str] | None, cache_dir: str | None) -> CheckResult:
+def _check_path(path: str, as_module: bool, overlay: dict[str, str] | None, cache_dir: str | None, keep_plans: bool = True,
+                guard_store: cache.MemoryStore | None = None) -> CheckResult:
     diags = Diagnostics()
     files = path_to_files(path, diags, as_module, overlay)
     if any(f.tree is None for f in files):
@@ -66,11 +74,12 @@ def _check_path(path: str, as_module: bool, overlay: dict[str, str] | None, cach
         # follow-on findings; report the syntax errors alone.
         add_hints(diags, None)
         return CheckResult(diags, None, files)
-    design = ast_to_model(files, diags)
-    store = None
-    if cache_dir is not None and not cache.disabled_by_environment():
+    design = ast_to_model(files, diags, release_plans=not keep_plans)
+    store = value_store = guard_store  # a MemoryStore holds both analyses
+    if store is None and cache_dir is not None and not cache.disabled_by_environment():
         store = cache.Store(cache_dir, "guards")
-    check_model(design, diags, guards.Options(store=store))
+        value_store = cache.Store(cache_dir, "values")
+    check_model(design, diags, guards.Options(store=store), value_store)
     # Unused suppressions are reported only when the checks all ran (errors
     # stop the guard analysis, whose findings an `allow` may be waiting for).
     suppress.apply([f.source for f in files], diags, report_unused=not diags.has_errors())

@@ -43,3 +43,4 @@ def test_check_benchmark_prints_every_column_and_stage() -> None:
     rows = [line for line in proc.stdout.splitlines() if line.strip().startswith(("2 ", "3 "))]
     assert len(rows) == 2 and all(len(r.split("|")) == 5 for r in rows), proc.stdout
     assert "parse" in proc.stdout and "names+types" in proc.stdout and "guards" in proc.stdout
+    assert "language server re-check after one edit" in proc.stdout

@@ -23,7 +23,8 @@ from rcsc.cli import main
 ROOT = Path(__file__).resolve().parents[1]
 CASES = ROOT / "tests" / "cases"
 # Designs with guard findings (witnesses, externs, records) and without.
-DESIGNS = ["W0515_order_dependent.rcs", "W0515_records_and_externs.rcs", "E0506_dead_rule.rcs", "W0517_waits_forever.rcs", "E0516_new_unanswered.rcs"]
+DESIGNS = ["W0515_order_dependent.rcs", "W0515_records_and_externs.rcs", "E0506_dead_rule.rcs", "W0517_waits_forever.rcs", "E0516_new_unanswered.rcs",
+           "W0524_range_flow.rcs", "W0525_overflow_division.rcs"]
 
 
 @pytest.fixture(autouse=True)
@@ -38,6 +39,12 @@ def _check(path: Path, capsys, *extra: str) -> str:
 
 def _entries(folder: Path) -> list[Path]:
     return sorted(folder.glob("guards-*.json"))
+
+
+def _forget_findings(folder: Path) -> None:
+    """Delete the replayed checks (rcsc.checks.replay), so that the next run reads the guard entries."""
+    for p in folder.glob("result-*.json"):
+        p.unlink()
 
 
 def _fresh_check(path: Path, *extra: str) -> str:
@@ -75,6 +82,7 @@ def test_the_cache_is_really_read(tmp_path: Path, capsys) -> None:
         doc["payload"] = "[]"
         doc["checksum"] = __import__("hashlib").sha256(b"[]").hexdigest()
         path.write_text(json.dumps(doc))
+    _forget_findings(tmp_path / cache.FOLDER)
     assert "W0515" not in _check(design, capsys)
 
 
@@ -102,6 +110,7 @@ def test_corrupt_entries_are_ignored_and_rewritten(tmp_path: Path, damage) -> No
     good = {p: p.read_text() for p in entries}
     for p in entries:
         p.write_text(damage(good[p]), encoding="utf-8", errors="surrogateescape")
+    _forget_findings(tmp_path / cache.FOLDER)
     assert _fresh_check(design) == reference
     for p in entries:  # rewritten: the same bytes as a clean run writes
         assert p.read_text() == good[p]
@@ -141,3 +150,30 @@ def test_tagged_json_round_trip() -> None:
     assert repr(back) == repr(value)
     with pytest.raises(cache.NotStorable):
         cache.encode(object())
+
+
+def test_value_findings_come_from_the_cache_at_their_new_place(tmp_path: Path, capsys) -> None:
+    """The value analysis (W0524/W0525) keeps each plan's findings too: a design
+    edited above the plans reads them back where the plans now are, with the
+    bytes of a check without cache; an entry emptied (valid checksum) is believed."""
+    design = tmp_path / "d.rcs"
+    text = (CASES / "W0524_range_flow.rcs").read_text(encoding="utf-8")
+    design.write_text(text, encoding="utf-8")
+    _fresh_check(design)  # fills the cache
+    design.write_text("// moved down\n\n" + text, encoding="utf-8")
+    scratch = _fresh_check(design, "--no-cache")
+    assert "W0524" in scratch
+    assert _fresh_check(design) == scratch
+    folder = tmp_path / cache.FOLDER
+    emptied = 0
+    for path in sorted(folder.glob("values-*.json")):
+        doc = json.loads(path.read_text())
+        payload = json.loads(doc["payload"])
+        if payload and payload[0][0] == "W0524":
+            doc["payload"] = "[]"
+            doc["checksum"] = __import__("hashlib").sha256(b"[]").hexdigest()
+            path.write_text(json.dumps(doc))
+            emptied += 1
+    assert emptied
+    _forget_findings(folder)
+    assert "W0524" not in _check(design, capsys)

@@ -30,7 +30,7 @@ def _fake_driver(monkeypatch: pytest.MonkeyPatch, diags: Diagnostics | None = No
     """Make `rcsc check` see `diags` (or raise `raises`) instead of running the front end."""
     calls: list[str] = []
 
-    def check_path(path: str, as_module=False, overlay=None, cache_dir=None):
+    def check_path(path: str, as_module=False, overlay=None, cache_dir=None, keep_plans=True):
         calls.append(path)
         if raises is not None:
             raise raises

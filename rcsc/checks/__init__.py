@@ -4,21 +4,43 @@ Each family is a function `check(design, diags)` that only reads the model
 (except the hierarchy check, which records each controller's supervisor, and
 the timing check, which records each controller's CPU, divider and period and
 the design's crossing buffers, for later stages).
+
+The families (and z3) are imported when first used (`FAMILIES`,
+`check_model`), so that the light modules of this package (`cache`,
+`replay`) load without them.
 """
 
 from __future__ import annotations
 
-from rcsc.checks import commands, cycle, floats, guards, hierarchy, ownership, plans, timing, values
-from rcsc.diagnostics import Diagnostics
-from rcsc.semantics.model import Design
+from typing import TYPE_CHECKING
 
-FAMILIES = (hierarchy, ownership, plans, commands, floats, timing, cycle, guards, values)
+if TYPE_CHECKING:  # pragma: no cover
+    from rcsc.checks import guards
+    from rcsc.diagnostics import Diagnostics
+    from rcsc.semantics.model import Design
 
 
-def check_model(design: Design, diags: Diagnostics, guard_options: guards.Options | None = None) -> None:
-    """Run every check family; findings go to `diags`."""
-    for family in FAMILIES:
+def _families() -> tuple:
+    from rcsc.checks import commands, cycle, floats, guards, hierarchy, ownership, plans, timing, values
+
+    return (hierarchy, ownership, plans, commands, floats, timing, cycle, guards, values)
+
+
+def __getattr__(name: str):
+    if name == "FAMILIES":
+        return _families()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def check_model(design: "Design", diags: "Diagnostics", guard_options: "guards.Options | None" = None, value_store=None) -> None:
+    """Run every check family; findings go to `diags`.  `value_store` (a
+    `rcsc.checks.cache` store) keeps the value analysis between runs."""
+    from rcsc.checks import guards, values
+
+    for family in _families():
         if family is guards:
             guards.check(design, diags, guard_options)
+        elif family is values:
+            values.check(design, diags, value_store)
         else:
             family.check(design, diags)

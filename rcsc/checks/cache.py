@@ -1,9 +1,12 @@
 """Results kept between runs: a small on-disk store under `.rcsc-cache/`.
 
 `rcsc check` keeps the guard analysis of each plan shape (see
-`rcsc.checks.guards`) in the folder `.rcsc-cache/` next to the design's root
-file, so that a second run, or an editor re-checking after a change, only
-asks the solver about plans whose shape changed.  `--no-cache` (or
+`rcsc.checks.guards`) and the value analysis of each plan (see
+`rcsc.checks.values`) in the folder `.rcsc-cache/` next to the design's root
+file, so that a second run only asks the solver about plans that changed,
+and the findings of each design (`rcsc.checks.replay`), so that a run on
+unchanged files checks nothing.  The language server keeps the same entries
+in memory (`MemoryStore`).  `--no-cache` (or
 `RCSC_NO_CACHE=1`) turns it off; deleting the folder is always safe.
 
 Each entry is one JSON file named by the SHA-256 of its key.  The file
@@ -118,6 +121,36 @@ class Store:
             self.writes += 1
         except OSError:
             self.writable = False
+
+
+class MemoryStore:
+    """A `Store` in memory, for a long-lived process (the language server):
+    the same entries (kept as the JSON data `encode` makes), at most `limit`
+    of them (the oldest go first)."""
+
+    def __init__(self, limit: int = 50_000) -> None:
+        self.limit = limit
+        self.entries: dict[str, object] = {}
+        self.hits = self.misses = self.writes = 0
+
+    def get(self, key: str):
+        value = self.entries.get(key)
+        if value is None:
+            self.misses += 1
+        else:
+            self.hits += 1
+        return value
+
+    def put(self, key: str, value) -> None:
+        try:  # what the disk store could not hold is not held here either
+            json.dumps(value, allow_nan=False)
+        except (ValueError, TypeError):
+            return
+        self.entries.pop(key, None)
+        self.entries[key] = value
+        self.writes += 1
+        while len(self.entries) > self.limit:
+            del self.entries[next(iter(self.entries))]
 
 
 def digest(key) -> str:

@@ -27,10 +27,16 @@ W0525 integer overflow or division by zero
 
 from __future__ import annotations
 
+import dataclasses
+
 import z3
 
+from rcsc.checks import cache
+from rcsc.codes import CODES
+from rcsc.diagnostics import Diagnostic, Label, Severity
+from rcsc.front.source import Span
 from rcsc.semantics import model as m
-from rcsc.checks.guards import front_end_errors, nan_params
+from rcsc.checks.guards import _ekey, _skey, front_end_errors, nan_params
 from rcsc.checks.plans import plan_states, rule_sources
 from rcsc.diagnostics import Diagnostics
 from rcsc.semantics.model import Design
@@ -42,16 +48,147 @@ RLIMIT = 1_000_000
 I64 = IntType("i64", 64, True)
 
 
-def check(design: Design, diags: Diagnostics) -> None:
+def check(design: Design, diags: Diagnostics, store=None) -> None:
+    """The value analysis of every plan; with `store` (a `rcsc.checks.cache`
+    store), each plan's findings are read from and written to it (see
+    "Results kept between runs" below)."""
     if front_end_errors(diags):
         return
     nan = nan_params(design)
+    context = None
+    if store is not None:
+        try:
+            context = cache.digest(("values", FORMAT, _structure(_context_of(design))))
+        except cache.NotStorable:
+            store = None
     for c in design.controllers.values():
         cpu = design.cpus.get(c.cpu) if c.cpu else None
         period = cpu.heartbeat_ns if cpu is not None else None
         for plan in c.plans.values():
-            if plan.verb in c.verbs:
-                _Plan(design, c, plan, period, diags, (c.name, plan.verb) in nan).run()
+            if plan.verb not in c.verbs:
+                continue
+            flag = (c.name, plan.verb) in nan
+            if store is None:
+                _Plan(design, c, plan, period, diags, flag).run()
+                continue
+            key = cache.digest((context, c.name, period, flag, _plan_key(plan)))
+            if _replay(store, key, plan, diags):
+                continue
+            own = Diagnostics()
+            _Plan(design, c, plan, period, own, flag).run()
+            _remember(store, key, plan, own)
+            diags.extend(own)
+
+
+# ---- results kept between runs ---------------------------------------------------------------
+#
+# A plan's value findings depend on the plan (its rules, conditions and
+# jobs), on the declarations of the whole design (types, constants,
+# functions, Global Memory, every controller but its plans: verbs and their
+# ranges, locals, status fields, CPUs) and on whether the plan's parameters
+# may be NaN (which the supervisors' plans decide; computed every run).  The
+# key holds all of that, spans left out; the findings are stored with their
+# spans as positions among the plan's nodes, so a plan that only moved in
+# the file (an edit above it) reads its findings back at the new place.
+
+FORMAT = 1
+_FIELDS: dict[type, tuple[str, ...]] = {}
+
+
+def _structure(x):
+    """`x` (model objects, containers, values) as nested tuples, without spans."""
+    t = type(x)
+    if x is None or t is bool or t is int or t is str:
+        return x
+    if t is float:
+        return ("float", x.hex()) if x == x else ("nan",)
+    if t is Span:
+        return None
+    if t is list or t is tuple:
+        return tuple(_structure(v) for v in x)
+    if t is dict:
+        return ("dict",) + tuple((_structure(k), _structure(v)) for k, v in x.items())
+    names = _FIELDS.get(t)
+    if names is None:
+        if not dataclasses.is_dataclass(x):
+            raise cache.NotStorable(t.__name__)
+        names = _FIELDS[t] = tuple(f.name for f in dataclasses.fields(x))
+    return (t.__name__,) + tuple(_structure(getattr(x, n)) for n in names)
+
+
+def _context_of(design: Design) -> tuple:
+    controllers = tuple(
+        (name, tuple((f.name, getattr(c, f.name)) for f in dataclasses.fields(c) if f.name != "plans"))
+        for name, c in design.controllers.items()
+    )
+    return (design.gm, design.consts, design.functions, design.enums, design.records, design.cpus, design.base_tick_ns, controllers)
+
+
+def _plan_key(plan: m.Plan) -> tuple:
+    rules = tuple(
+        (r.index, r.label, r.state.kind, r.state.name, r.next.kind, r.next.name, r.next.code,
+         None if r.guard is None else _ekey(r.guard), _skey(r.jobs))
+        for r in plan.rules
+    )
+    return (plan.verb, plan.continuous, plan.ordered, rules)
+
+
+def _positions(plan: m.Plan) -> list[Span]:
+    """The spans of a plan's rules and nodes, in a fixed order."""
+    out: list[Span] = []
+    for r in plan.rules:
+        out += (r.span, r.label_span, r.guard_span)
+        if r.guard is not None:
+            out += [x.span for x in m.walk_expr(r.guard)]
+        for s in m.walk_stmts(r.jobs):
+            out.append(s.span)
+            for e in m.stmt_exprs(s):
+                out += [x.span for x in m.walk_expr(e)]
+    return out
+
+
+def _remember(store, key: str, plan: m.Plan, own: Diagnostics) -> None:
+    index: dict[tuple, int] = {}
+    for i, sp in enumerate(_positions(plan)):
+        index.setdefault((id(sp.file), sp.start, sp.end), i)
+
+    def where(sp: Span | None):
+        if sp is None:
+            return None
+        return index[(id(sp.file), sp.start, sp.end)]
+
+    try:
+        data = [
+            [d.code, d.severity.value, d.message, where(d.span), d.label, [[where(lab.span), lab.message] for lab in d.labels],
+             list(d.notes), list(d.helps), cache.encode(d.data)]
+            for d in own.items
+        ]
+    except (KeyError, cache.NotStorable):
+        return  # a span that is not one of the plan's, or data JSON cannot hold
+    store.put(key, data)
+
+
+def _replay(store, key: str, plan: m.Plan, diags: Diagnostics) -> bool:
+    data = store.get(key)
+    if not isinstance(data, list):
+        return False
+    spans = _positions(plan)
+    try:
+        found = []
+        for code, sev, message, at, label, labels, notes, helps, extra in data:
+            d = Diagnostic(code, Severity(sev), message, None if at is None else spans[at], label)
+            d.labels = [Label(None if a is None else spans[a], msg) for a, msg in labels]
+            d.notes, d.helps = list(notes), list(helps)
+            d.data = cache.decode(extra, {})
+            if code not in CODES or not isinstance(d.data, dict):
+                return False
+            found.append(d)
+    except (KeyError, ValueError, TypeError, IndexError):
+        return False
+    own = Diagnostics()
+    own.items = found
+    diags.extend(own)
+    return True
 
 
 def _assigned_names(s: m.Stmt) -> set[tuple[str, str]]:

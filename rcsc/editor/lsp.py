@@ -28,6 +28,7 @@ from pygls.lsp.server import LanguageServer
 
 import rcsc
 from rcsc import codes
+from rcsc.checks import cache
 from rcsc.editor import fmt, symbols
 from rcsc.front import workspace
 from rcsc import config as cfg
@@ -108,6 +109,9 @@ class RcsServer(LanguageServer):
         self.pending: dict[str, asyncio.Task] = {}
         self.indexes: dict[str, symbols.Index] = {}  # uri -> index of its design
         self.sources: dict[str, SourceFile] = {}  # uri -> the text the index was built from
+        # The guard analysis of every plan shape met so far: a re-check asks
+        # the solver only about plans whose shape the edit changed.
+        self.guard_store = cache.MemoryStore()
 
     # -- checking ------------------------------------------------------------
 
@@ -138,7 +142,7 @@ class RcsServer(LanguageServer):
                     root, as_module = design, False
                     break
         try:
-            result = driver.check_path(root, as_module=as_module, overlay=overlay)
+            result = driver.check_path(root, as_module=as_module, overlay=overlay, guard_store=self.guard_store)
         except driver.InputError as exc:
             diag = lsp.Diagnostic(range=lsp.Range(start=lsp.Position(line=0, character=0), end=lsp.Position(line=0, character=0)),
                                   message=str(exc), severity=lsp.DiagnosticSeverity.Error, source="rcsc")

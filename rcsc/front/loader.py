@@ -30,6 +30,9 @@ class LoadedFile:
     tree: ast.File | None
     module: str  # module name ("" for the root design or header-less files)
     is_root: bool = False
+    # Where the text came from: the real path of a local file, `<stdlib>/MODULE`
+    # for a standard-library module (see `rcsc.checks.replay`).
+    real: str = ""
 
 
 def _read(path: str) -> str:
@@ -89,7 +92,7 @@ def path_to_files(
             module = tree.name.name if tree.name is not None and tree.kind == "module" else ""
             if not (is_root and as_module and tree.kind == "module"):
                 _check_header(tree, source, is_root, diags)
-        files.append(LoadedFile(source, tree, module, is_root))
+        files.append(LoadedFile(source, tree, module, is_root, real))
         if tree is None:
             return
         for item in tree.items:

@@ -518,7 +518,7 @@ class _Parser:
         value = self.expr()
         if end is not None:
             self.expect(end)
-        return self.nest(ast.Assign(self.span(first), target, op, value), value)
+        return self.nest1(ast.Assign(self.span(first), target, op, value), value)
 
     def call_stmt(self, first: int, end: str | None) -> ast.CallStmt:
         """`NAME "(" [args] ")"`, then `end` (`;` in a block); the Call and
@@ -530,7 +530,7 @@ class _Parser:
             self.expect(end)
         span = self.span(first)
         call = self.nest(ast.Call(span, func, args), *[a.value for a in args])
-        return self.nest(ast.CallStmt(span, call), call)
+        return self.nest1(ast.CallStmt(span, call), call)
 
     # ---- blocks (pre/post) ---------------------------------------------------------
 
@@ -727,6 +727,9 @@ class _Parser:
             raise Fallback
         self.i = first + 2
         span = self.span(first)
+        if number.isdigit() and number.isascii() and len(number) <= 18:
+            # A plain integer (the usual `10 ms`): exact without fractions.
+            return ast.DurationLit(span, int(number) * UNIT_NANOS[unit], f"{number} {unit}")
         nanos = literal_fraction(number) * UNIT_NANOS[unit]
         if nanos.denominator != 1:
             self.diags.add("E0210", span, "duration is not a whole number of nanoseconds", "finer than 1 ns")

@@ -376,30 +376,44 @@ class Design:
 # ---- walking ---------------------------------------------------------------------
 
 
-def walk_expr(e: Expr):
+def walk_expr(e: Expr) -> list[Expr]:
     """Every sub-expression of `e`, `e` first (pre-order, left to right).
 
     Iterative: nested generators would cost a step per level for every
-    node, which is quadratic in long `a and b and c ...` chains.
+    node, which is quadratic in long `a and b and c ...` chains.  The
+    checks walk every expression several times, so this is a hot path: it
+    dispatches on the exact class (no subclasses of the node classes exist)
+    and returns a list.
     """
+    out: list[Expr] = []
+    add = out.append
     stack = [e]
     pop, push = stack.pop, stack.append
     while stack:
         x = pop()
-        yield x
-        if isinstance(x, Binary):
+        add(x)
+        t = type(x)
+        if t in _LEAVES:
+            continue
+        if t is Binary:
             push(x.right)
             push(x.left)
-        elif isinstance(x, Field):
+        elif t is Field:
             push(x.obj)
-        elif isinstance(x, Call):
+        elif t is Call:
             stack.extend(reversed(x.args))
-        elif isinstance(x, Unary):
+        elif t is Unary:
             push(x.operand)
-        elif isinstance(x, IfExpr):
+        elif t is IfExpr:
             push(x.else_)
             push(x.then)
             push(x.cond)
+        elif isinstance(x, (Binary, Field, Call, Unary, IfExpr)):  # pragma: no cover - a subclass
+            raise TypeError(f"walk_expr: subclass {t.__name__} of a node class")
+    return out
+
+
+_LEAVES = frozenset((Const, Ref, InState, Age, SubView))
 
 
 def walk_stmts(stmts: list[Stmt]):

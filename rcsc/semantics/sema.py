@@ -33,6 +33,7 @@ class _Sema:
         self.g.resolve_const = self._resolve_const_lazily
         self.g.resolve_fn = self._fn_body
         self.fn_busy: set[str] = set()
+        self.release_plans = False
         self.decls: dict[str, ast.Node] = {}
         self.const_ast: dict[str, ast.Const] = {}
         self.const_busy: set[str] = set()
@@ -391,6 +392,11 @@ class _Sema:
                 diag.with_help(f"declare it: `verb {verb_name}`")
                 verb = m.Verb(verb_name, [], plan.name.span)
             c.plans[verb_name] = self.plan(c, verb, plan)
+        if self.release_plans:
+            # The plans are most of a large design's syntax tree: letting them
+            # go as soon as they are converted keeps the tree and the model
+            # from being in memory whole at the same time.
+            item.plans = []
         for v in c.verbs.values():
             if v.name not in c.plans:
                 diag = self.d.add("E0500", v.use_span, f"verb `{v.name}` of `{c.name}` has no plan", "no plan for this verb")
@@ -474,11 +480,15 @@ class _Sema:
         return out
 
 
-def ast_to_model(files: list[LoadedFile], diags: Diagnostics) -> m.Design:
-    """Resolve and type-check the loaded files into one design model."""
+def ast_to_model(files: list[LoadedFile], diags: Diagnostics, release_plans: bool = False) -> m.Design:
+    """Resolve and type-check the loaded files into one design model.
+
+    With `release_plans`, each controller's plans are removed from its syntax
+    tree once converted (`rcsc check` needs only the model afterwards)."""
     root = next((f for f in files if f.is_root), files[0])
     name = root.tree.name.name if root.tree is not None and root.tree.name is not None else "design"
     s = _Sema(files, diags)
+    s.release_plans = release_plans
     s.collect()
     s.types()
     s.globals_()

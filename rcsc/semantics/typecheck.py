@@ -196,9 +196,20 @@ class Checker:
 
     # ---- expressions -----------------------------------------------------------
 
+    # The `e_` method of each node class, per checker class (a subclass may
+    # override some): looked up once instead of by name for every node.
+    _methods: dict[type, object] = {}
+
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        cls._methods = {}
+
     def expr(self, node: ast.Expr, expected: Type | None = None) -> m.Expr:
-        method = getattr(self, "e_" + type(node).__name__)
-        return method(node, expected)
+        kind = type(node)
+        method = self._methods.get(kind)
+        if method is None:
+            method = self._methods[kind] = getattr(type(self), "e_" + kind.__name__)
+        return method(self, node, expected)
 
     def e_IntLit(self, node: ast.IntLit, expected: Type | None) -> m.Expr:
         return self._int_value(node.value, node.span, expected)
@@ -428,21 +439,22 @@ class Checker:
         order, each expecting the type of the first; then every untyped operand is
         checked expecting that type, or `hint` (the context's type) when no operand
         is typed.  So `A > 5 + 1`, `5 + 1 < A` and `abs(5) == A` type alike."""
-        out: dict[int, m.Expr] = {}
+        untyped = [self._untyped(n) for n in nodes]
         t = hint
-        if t is None and all(self._untyped(n) for n in nodes):
+        if t is None and all(untyped):
             # No type anywhere: the literals' own default, i32, or i64 if one does not fit.
             t = I32 if all(I32.min <= v <= I32.max for n in nodes for v in _literal_values(n)) else I64
+        out: list[m.Expr | None] = [None] * len(nodes)
         first = True
         for i, n in enumerate(nodes):
-            if not self._untyped(n):
-                out[i] = self.expr(n, t)
+            if not untyped[i]:
+                e = out[i] = self.expr(n, t)
                 if first:
-                    t, first = out[i].type, False
+                    t, first = e.type, False
         for i, n in enumerate(nodes):
-            if i not in out:
+            if untyped[i]:
                 out[i] = self.expr(n, t)
-        return [out[i] for i in range(len(nodes))]
+        return out  # type: ignore[return-value]
 
     def e_Binary(self, node: ast.Binary, expected: Type | None) -> m.Expr:
         op = node.op
@@ -456,7 +468,7 @@ class Checker:
         lt, rt = left.type, right.type
         if isinstance(lt, ErrorType) or isinstance(rt, ErrorType):
             return m.Const(node.span, ERROR, 0)
-        if lt != rt:
+        if lt is not rt and lt != rt:
             diag = self.d.add("E0200", node.op_span, f"mismatched types: `{lt}` {op} `{rt}`", "operands of different types")
             diag.with_label(node.left.span, f"`{lt}`").with_label(node.right.span, f"`{rt}`")
             if lt.is_numeric and rt.is_numeric:

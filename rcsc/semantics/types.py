@@ -112,6 +112,8 @@ INT_TYPES = {"i32": I32, "i64": I64, "u32": U32}
 
 def compatible(expected: Type, actual: Type) -> bool:
     """Whether a value of `actual` may stand where `expected` is required."""
+    if expected is actual:  # the usual case: types are mostly singletons
+        return True
     if isinstance(expected, ErrorType) or isinstance(actual, ErrorType):
         return True
     return expected == actual
