@@ -44,3 +44,18 @@ def test_check_benchmark_prints_every_column_and_stage() -> None:
     assert len(rows) == 2 and all(len(r.split("|")) == 5 for r in rows), proc.stdout
     assert "parse" in proc.stdout and "names+types" in proc.stdout and "guards" in proc.stdout
     assert "language server re-check after one edit" in proc.stdout
+
+
+def test_lsp_benchmark_times_every_example_with_the_servers_store() -> None:
+    """bench/bench_lsp.py prints a row per example; it uses the in-memory store of
+    analyses that `rcsc lsp` keeps, so it times what the server does."""
+    root = Path(__file__).resolve().parents[1]
+    proc = subprocess.run([sys.executable, str(root / "bench" / "bench_lsp.py"), "--runs", "1"], capture_output=True, text=True,
+                          cwd=root, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    for example in sorted((root / "examples").glob("*/*.rcs")):
+        row = next((ln for ln in proc.stdout.splitlines() if ln.startswith(example.relative_to(root).as_posix())), None)
+        assert row is not None, proc.stdout
+        assert float(row.split()[1]) > 0 and row.split()[-1] in ("ok", "missed"), row
+    assert "guard_store=store" in (root / "bench" / "bench_lsp.py").read_text(encoding="utf-8")
+    assert "guard_store=self.guard_store" in (root / "rcsc" / "editor" / "lsp.py").read_text(encoding="utf-8")
