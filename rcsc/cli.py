@@ -370,26 +370,36 @@ def _add_sim_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", metavar="FILE", help="write the trace to FILE instead of stdout")
 
 
-def _run_sim(args: argparse.Namespace) -> int:
-    from rcsc.sim import trace
-    from rcsc.sim.runner import run_scenario
+def _checked_scenario(design_path: str, scenario_path: str):
+    """The checked design and its parsed scenario (`rcsc sim`, `rcsc events`);
+    None after reporting the findings that stop either."""
     from rcsc.front.scenario import text_to_scenario
     from rcsc.front.source import SourceFile
 
-    result = _check(args.path)
+    result = _check(design_path)
     if not result.ok or result.model is None:
         _report_to_stderr(result.diags)
-        return EXIT_FINDINGS
-    design = result.model
+        return None
     try:
-        text = safeio.read_input(args.scenario).decode("utf-8")
+        text = safeio.read_input(scenario_path).decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        raise UsageError(f"{args.scenario}: cannot read: {getattr(exc, 'strerror', None) or exc}") from exc
+        raise UsageError(f"{scenario_path}: cannot read: {getattr(exc, 'strerror', None) or exc}") from exc
     diags = Diagnostics()
-    sc = text_to_scenario(SourceFile(args.scenario, text), design, diags)
+    sc = text_to_scenario(SourceFile(scenario_path, text), result.model, diags)
     if sc is None:
         _report_to_stderr(diags)
+        return None
+    return result.model, sc
+
+
+def _run_sim(args: argparse.Namespace) -> int:
+    from rcsc.sim import trace
+    from rcsc.sim.runner import run_scenario
+
+    loaded = _checked_scenario(args.path, args.scenario)
+    if loaded is None:
         return EXIT_FINDINGS
+    design, sc = loaded
     run = run_scenario(design, sc)
     fmt = args.trace_format
     if fmt is None:
@@ -426,25 +436,13 @@ def _add_events_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_events(args: argparse.Namespace) -> int:
-    from rcsc.front.scenario import text_to_scenario
-    from rcsc.front.source import SourceFile
     from rcsc.outputs import backend
     from rcsc.outputs.events import event_text
 
-    result = _check(args.path)
-    if not result.ok or result.model is None:
-        _report_to_stderr(result.diags)
+    loaded = _checked_scenario(args.path, args.scenario)
+    if loaded is None:
         return EXIT_FINDINGS
-    design = result.model
-    try:
-        text = safeio.read_input(args.scenario).decode("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise UsageError(f"{args.scenario}: cannot read: {getattr(exc, 'strerror', None) or exc}") from exc
-    diags = Diagnostics()
-    sc = text_to_scenario(SourceFile(args.scenario, text), design, diags)
-    if sc is None:
-        _report_to_stderr(diags)
-        return EXIT_FINDINGS
+    design, sc = loaded
     ctrls = backend.built_controllers(design, backend.BuildOptions(exclude_simulators=args.exclude_simulators))
     _emit_report(event_text(design, sc, ctrls), args.output)
     return EXIT_OK
