@@ -449,6 +449,62 @@ def _run_events(args: argparse.Namespace) -> int:
 
 
 # ---------------------------------------------------------------------------
+# rcsc console
+# ---------------------------------------------------------------------------
+
+def _add_console_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("path", metavar="DESIGN", help="the design's root file (the one the running Main Program was built from)")
+    p.add_argument("--run", dest="run_id", metavar="ID", help="the run id the Main Program was started with (`--run ID`); default: the only one running")
+    p.add_argument("--color", choices=("auto", "always", "never"), default="auto", help="colour diagnostics (default: auto)")
+
+
+def _run_console(args: argparse.Namespace) -> int:
+    from rcsc.sim import console
+
+    result = _check(args.path)
+    if not result.ok or result.model is None:
+        _report_to_stderr(result.diags)
+        return EXIT_FINDINGS
+    design = result.model
+    run = args.run_id
+    try:
+        if run is None:
+            runs = console.find_runs(design.name)
+            if len(runs) != 1:
+                raise console.ConsoleError(
+                    "E0810",
+                    f"no running Main Program of `{design.name}` publishes an operator segment; start it with `--run ID`"
+                    if not runs else f"several runs of `{design.name}` are running ({', '.join(runs)}): give `--run ID`",
+                )
+            run = runs[0]
+        tty = sys.stdin.isatty() and sys.stdout.isatty()
+        if tty:
+            try:
+                import readline  # noqa: F401  (line editing and history for input())
+            except ImportError:
+                pass
+
+            def typed():
+                while True:
+                    try:
+                        yield input("> ")
+                    except EOFError:
+                        return
+
+            lines = typed()
+        else:
+            lines = sys.stdin
+        return console.run_console(design, run, lines, sys.stdout, color=_use_color(args.color, None, sys.stdout))
+    except console.ConsoleError as exc:
+        diags = Diagnostics()
+        diags.add(exc.code, None, exc.message)
+        _report_to_stderr(diags)
+        return EXIT_FINDINGS
+    except KeyboardInterrupt:
+        return EXIT_OK
+
+
+# ---------------------------------------------------------------------------
 # rcsc test
 # ---------------------------------------------------------------------------
 
@@ -793,6 +849,7 @@ COMMANDS: dict[str, Command] = {
     "explain": Command("explain a diagnostic code", _add_explain_arguments, _run_explain),
     "sim": Command("run a scenario in the reference simulator and write its trace", _add_sim_arguments, _run_sim),
     "events": Command("compile a scenario into the event file a compiled Main Program reads", _add_events_arguments, _run_events),
+    "console": Command("operate a running Main Program: commands, live status, pause and step (docs/console.md)", _add_console_arguments, _run_console),
     "test": Command("run scenarios with expectations, like a test runner", _add_test_arguments, _run_test),
     "budget": Command("print each CPU's timing table (budgets against the heartbeat)", _add_budget_arguments, _run_budget),
     "graph": Command("draw the hierarchy, the data flow or a plan (DOT, SVG, PNG, Mermaid)", _add_graph_arguments, _run_graph),

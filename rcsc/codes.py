@@ -781,6 +781,127 @@ the run has no end; with two `cycles` lines it is ambiguous which one counts.
 freezes one controller (it is not stepped any more). The name after `stop` must
 be one of the design's CPUs and the name after `freeze` one of its controllers.
 """),
+    ("E0810", _E, "no running Main Program to attach the console to", """
+`rcsc console DESIGN` attaches to a Main Program of that design that was
+started with `--run ID`: the program then publishes its status and takes
+requests in the shared memory `/rcs-<design>-<ID>.console`. Without `--run`
+nothing is published; with several runs the console needs to know which.
+
+Wrong:
+
+    ./submarine_MAIN &
+    rcsc console submarine.rcs
+
+Fixed:
+
+    ./submarine_MAIN --run bridge &
+    rcsc console submarine.rcs --run bridge
+"""),
+    ("E0811", _E, "the running Main Program was built from another design", """
+The console compiles operator commands against the design it is given, into
+ids and bit patterns that are valid only for a Main Program built from the
+same interface (the interface hash of docs/events.md). A program built
+before a verb, parameter or controller changed would apply them wrongly, so
+the console refuses to attach: rebuild and restart the program.
+
+Wrong:
+
+    rcsc build cell.rcs --target c -o build/cell    # then a verb is added to cell.rcs
+    rcsc console cell.rcs --run r1
+
+Fixed:
+
+    rcsc build cell.rcs --target c -o build/cell && make -C build/cell
+    ./build/cell/cell_MAIN --run r1 &
+    rcsc console cell.rcs --run r1
+"""),
+    ("E0812", _E, "not a console command", """
+A console line is either an operator command or input in the scenario syntax
+(`SM.TRANSIT(speed = 12.0)`, `trip = true`) or a console word: `status`,
+`pause`, `resume`, `step [N]`, `pause NODE`, `step NODE [N]`, `run NODE`,
+`quit`, `help`, `exit`. A step count is a whole number from 1.
+
+Wrong:
+
+    step fast
+    pause SM now
+
+Fixed:
+
+    step 10
+    pause SM
+"""),
+    ("E0813", _E, "no such controller in the running Main Program", """
+`pause NODE`, `step NODE` and `run NODE` name one controller of the running
+Main Program. A deployment build (`--exclude-simulators`) has no simulators.
+
+Wrong:
+
+    pause TURBINE
+
+Fixed:
+
+    pause TB
+"""),
+    ("E0814", _E, "not an operator action", """
+The console sends one operator command or one input at the next cycle. Cycle
+numbers (`at N:`), expectations, `cycles` and the faults `stop` and `freeze`
+belong in scenario files; to hold one controller use `pause NODE`.
+
+Wrong:
+
+    at 10: SM.INIT()
+    freeze TB
+
+Fixed:
+
+    SM.INIT()
+    pause TB
+"""),
+    ("E0815", _E, "the Main Program refused or did not answer a request", """
+The console hands each request to the running Main Program through the ring
+of its operator segment and waits for the answer. The program refuses a
+request it cannot apply (its event reader's message is shown) and does not
+answer once it has ended or is stopped in a debugger.
+
+Wrong:
+
+    kill -STOP $(pidof submarine_MAIN)    # then, in the console:
+    SM.INIT()
+
+Fixed:
+
+    kill -CONT $(pidof submarine_MAIN)
+    SM.INIT()
+"""),
+    ("E0816", _E, "another console is attached to this run", """
+One console at a time operates a run (it holds a lock on the operator
+segment), so that two operators never interleave commands unknowingly. Leave
+the other console (`exit` or end of input) first.
+
+Wrong:
+
+    rcsc console submarine.rcs --run bridge    # in two terminals
+
+Fixed:
+
+    rcsc console submarine.rcs --run bridge    # in one terminal
+"""),
+    ("W0810", _W, "the Main Program has ended", """
+The run the console is attached to has finished (its cycles are done, it was
+quit, or it was stopped): nothing more is sent. The last status table stays
+readable with `status`.
+
+Wrong:
+
+    ./submarine_MAIN --run r1 --cycles 10 &
+    sleep 1; rcsc console submarine.rcs --run r1    # SM.INIT() comes too late
+
+Fixed:
+
+    ./submarine_MAIN --run r1 --paused &
+    rcsc console submarine.rcs --run r1    # SM.INIT(), then resume
+"""),
     ("E0605", _E, "design has no CPU", """
 A design needs at least one `cpu` with a heartbeat and a schedule to say where
 and how often its controllers run.

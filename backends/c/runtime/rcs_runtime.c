@@ -17,6 +17,7 @@
 #include "rcs_runtime.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <float.h>
 #include <inttypes.h>
 #include <poll.h>
@@ -29,6 +30,7 @@
 #include <string.h>
 #include <sys/mman.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <termios.h>
 #include <time.h>
 #include <unistd.h>
@@ -391,27 +393,32 @@ static int ev_read(ev_reader *r, char *text, size_t len, rcs_scenario *sc) {
     }
 }
 
-rcs_scenario *rcs_scenario_load(const char *path, const rcs_design *d, FILE *err) {
+/* Reads the event file `text` (len bytes, changed in place) named `path` in messages. */
+static rcs_scenario *scenario_parse(const char *path, char *text, size_t len, const rcs_design *d, FILE *err) {
     ev_reader *r = xcalloc(1, sizeof *r);
     r->path = path;
     r->err = err ? err : stderr;
     r->d = d;
-    size_t len = 0;
-    char *text = read_file(path, &len);
-    if (text == NULL) {
-        fprintf(r->err, "%s: error: cannot read the event file: %s\n", path, strerror(errno));
-        free(r);
-        return NULL;
-    }
     rcs_scenario *sc = xcalloc(1, sizeof *sc);
     sc->freeze_tick = xcalloc(d->n_ctrls ? d->n_ctrls : 1, sizeof *sc->freeze_tick);
     int ok = ev_read(r, text, len, sc);
-    free(text);
     free(r);
     if (!ok) {
         rcs_scenario_free(sc);
         return NULL;
     }
+    return sc;
+}
+
+rcs_scenario *rcs_scenario_load(const char *path, const rcs_design *d, FILE *err) {
+    size_t len = 0;
+    char *text = read_file(path, &len);
+    if (text == NULL) {
+        fprintf(err ? err : stderr, "%s: error: cannot read the event file: %s\n", path, strerror(errno));
+        return NULL;
+    }
+    rcs_scenario *sc = scenario_parse(path, text, len, d, err);
+    free(text);
     return sc;
 }
 
@@ -684,8 +691,14 @@ static void usage(FILE *o, const char *prog, const rcs_design *d) {
             "  --realtime        lock memory and run under SCHED_FIFO (needs privileges)\n"
             "  --no-timing       do not print the timing table at exit\n"
             "  --no-console      no keyboard console (p/space pause, s step, q quit)\n"
+            "  --init VERB       send VERB (no parameters) to the top controllers at start-up\n"
+            "  --paused          start paused (resume from the console)\n"
             "  --help            show this text\n",
             prog, d->design ? d->design : "?", d->cpu ? d->cpu : "?", (double)d->period_ns / 1000.0);
+    if (d->multi == NULL)
+        fputs("  --run ID          publish the status and take requests for `rcsc console` in\n"
+              "                    the shared memory /rcs-<design>-<ID>.console (docs/console.md)\n",
+              o);
     if (d->multi)
         fputs("One CPU of a multi-CPU design (start them all with the launcher, run_<design>):\n"
               "  --run ID          the run shared by the CPUs (names the shared memory or DDS partition)\n"
@@ -786,9 +799,9 @@ static void timing_table(const rcs_design *d, const step_stats *st, uint64_t cyc
 }
 
 typedef struct {
-    int fast, realtime, no_timing, no_console, help, lockstep;
+    int fast, realtime, no_timing, no_console, help, lockstep, paused;
     uint64_t cycles; /* 0: not given */
-    const char *scenario, *trace, *run;
+    const char *scenario, *trace, *run, *init;
     long domain; /* --domain: the DDS domain id, -1: not given */
 } options;
 
@@ -812,9 +825,11 @@ static int parse_options(int argc, char **argv, options *o) {
             o->no_console = 1;
         else if (IS("--lockstep") && !val)
             o->lockstep = 1;
+        else if (IS("--paused") && !val)
+            o->paused = 1;
         else if ((IS("--help") || IS("-h")) && !val)
             o->help = 1;
-        else if (IS("--cycles") || IS("--scenario") || IS("--trace") || IS("--run") || IS("--domain")) {
+        else if (IS("--cycles") || IS("--scenario") || IS("--trace") || IS("--run") || IS("--domain") || IS("--init")) {
             if (!val) {
                 if (i + 1 >= argc) {
                     fprintf(stderr, "rcs: %s needs a value\n", a);
@@ -831,6 +846,8 @@ static int parse_options(int argc, char **argv, options *o) {
                 o->scenario = val;
             } else if (IS("--run")) {
                 o->run = val;
+            } else if (IS("--init")) {
+                o->init = val;
             } else if (IS("--domain")) {
                 uint64_t dom = 0;
                 if (!(strcmp(val, "0") == 0 || parse_count(val, &dom)) || dom > 232u) {
@@ -853,7 +870,7 @@ static int parse_options(int argc, char **argv, options *o) {
 typedef struct {
     int on;
     int paused;
-    int step;
+    uint64_t step; /* cycles to run while paused (single steps) */
     int quit;
 } console;
 
@@ -898,6 +915,21 @@ static void console_poll(console *con, int timeout_ms, uint64_t cycle) {
 
 static int stop_flag(void) { return g_stop != 0; }
 
+/* Per-controller mode (PR_MODE, docs/console.md), set from the operator
+ * segment: a paused controller is not stepped, except for its pending
+ * single steps.  NULL: every controller runs. */
+static unsigned char *g_ctrl_paused;
+static uint64_t *g_ctrl_steps;
+
+static int ctrl_held(size_t ctrl) {
+    if (g_ctrl_paused == NULL || !g_ctrl_paused[ctrl]) return 0;
+    if (g_ctrl_steps[ctrl] > 0) {
+        g_ctrl_steps[ctrl]--;
+        return 0;
+    }
+    return 1;
+}
+
 /* Steps the controllers of the schedule due in `cycle` (their divider) and
  * not frozen at `tick`, timing each step. */
 static void run_schedule(const rcs_design *d, const rcs_scenario *sc, step_stats *st, uint64_t cycle, uint64_t tick) {
@@ -906,6 +938,7 @@ static void run_schedule(const rcs_design *d, const rcs_scenario *sc, step_stats
         if (c->divider > 1 && (cycle - 1u) % c->divider != 0) continue;
         uint64_t frozen = rcs_scenario_freeze_tick(sc, d->schedule[i]);
         if (frozen && frozen <= tick) continue;
+        if (ctrl_held(d->schedule[i])) continue;
         const int64_t s0 = now_ns();
         c->step(cycle);
         const int64_t dt = now_ns() - s0;
@@ -917,6 +950,327 @@ static void run_schedule(const rcs_design *d, const rcs_scenario *sc, step_stats
         s->n++;
         if (c->budget_ns > 0 && dt > c->budget_ns) s->overruns++;
     }
+}
+
+/* ==== the operator segment (docs/console.md) ==============================
+ *
+ * With `--run ID` a single-CPU Main Program publishes, in the POSIX
+ * shared-memory segment `/rcs-<design>-<ID>.console`, what `rcsc console`
+ * shows, and takes the operator's requests from a small ring in the same
+ * segment.  Every shared word is a uint64_t read and written through the
+ * `__atomic` builtins.  Layout (words):
+ *   header (OP_HEADER_WORDS): the OP_* words below;
+ *   text (OP_TEXT_AT, OP_TEXT_BYTES): the names, written once before the
+ *     magic (docs/console.md: design, cpu, hash, fields, per controller its
+ *     verbs, states, rules and extra statuses);
+ *   status table (OP_CTRL_AT): per controller OP_N_FIELDS words, the fields
+ *     op_fields[] lists, under the seqlock OP_SEQ (odd while written);
+ *   ring (OP_RING_AT): OP_RING slots of OP_SLOT_WORDS words: ready (the
+ *     request's number + 1), length in bytes, result (0 pending, 1 ok,
+ *     2 refused), a spare word, then the request's text; the reply replaces it.
+ * A console writes a slot, sets its ready word, then advances OP_REQ_HEAD;
+ * the Main Program serves requests in order and advances OP_REQ_DONE.
+ */
+
+enum {
+    OP_MAGIC, OP_VERSION, OP_WORDS, OP_PID, OP_N_CTRLS, OP_N_FIELDS, OP_SEQ, OP_CYCLE, OP_RUN_STATE, OP_PERIOD,
+    OP_REQ_HEAD, OP_REQ_DONE, OP_RING_SLOTS, OP_SLOT_WORDS, OP_TEXT_AT, OP_TEXT_BYTES, OP_CTRL_AT, OP_RING_AT,
+    OP_MAX_WORK, OP_CYCLE_OVERRUNS, OP_HEADER_WORDS = 32
+};
+enum { OP_RUNNING = 0, OP_PAUSED = 1, OP_FINISHED = 2 };
+#define OP_MAGIC_WORD UINT64_C(0x31304e4f43534352) /* "RCSCON01" */
+#define OP_RING 8u
+#define OP_SLOT_WORDS 1024u /* 4 words of slot head, then 8160 bytes of text */
+
+/* The published fields of each controller: the one list (add at the end;
+ * the console reads the names from the segment). */
+enum {
+    OF_VERB, OF_STATE, OF_STATUS, OF_RULE, OF_ECHO, OF_ERROR_CODE, OF_MODE, OF_PENDING_STEPS, OF_STEPS, OF_LAST_NS,
+    OF_MIN_NS, OF_MAX_NS, OF_MEAN_NS, OF_OVERRUNS, OF_BUDGET_NS, OP_N_FIELDS_
+};
+static const char *const op_fields[OP_N_FIELDS_] = {
+    "verb", "state", "status", "rule", "echo", "error_code", "mode", "pending_steps", "steps", "last_ns",
+    "min_ns", "max_ns", "mean_ns", "overruns", "budget_ns",
+};
+
+typedef struct {
+    char name[256];
+    uint64_t *w;
+    size_t words;
+    size_t *sched_at; /* per controller: its index in the schedule, or SIZE_MAX */
+    uint64_t served;  /* requests served (OP_REQ_DONE) */
+} operator_seg;
+
+static uint64_t op_ld(const uint64_t *p) { return __atomic_load_n(p, __ATOMIC_ACQUIRE); }
+static void op_st(uint64_t *p, uint64_t v) { __atomic_store_n(p, v, __ATOMIC_RELEASE); }
+
+static void op_put_names(FILE *t, const char *what, const char *const *names, size_t n, size_t from) {
+    fputs(what, t);
+    for (size_t i = from; i < n; i++) fprintf(t, " %s", names[i] && names[i][0] ? names[i] : "-");
+    fputc('\n', t);
+}
+
+/* Creates and fills the segment; NULL after a message on stderr. */
+static operator_seg *op_open(const rcs_design *d, const char *run) {
+    char id[200];
+    if (strlen(run) > 150) return NULL;
+    snprintf(id, sizeof id, "%s.console", run);
+    operator_seg *op = xcalloc(1, sizeof *op);
+    if (!rcs_shm_name(op->name, sizeof op->name, d->design, id)) {
+        fprintf(stderr, "rcs: --run needs an id of letters, digits, `_`, `.` and `-`, not `%s`\n", run);
+        free(op);
+        return NULL;
+    }
+    char *text = NULL;
+    size_t text_len = 0;
+    FILE *t = open_memstream(&text, &text_len);
+    if (t == NULL) out_of_memory();
+    fprintf(t, "rcsc-console 1\ndesign %s\ncpu %s\nhash %s\n", d->design, d->cpu, d->events_hash);
+    op_put_names(t, "fields", op_fields, OP_N_FIELDS_, 0);
+    for (size_t i = 0; i < d->n_ctrls; i++) {
+        const rcs_ctrl *c = &d->ctrls[i];
+        fprintf(t, "ctrl %s %s\n", c->name, c->top ? "top" : "sub");
+        fputs("verbs", t);
+        for (size_t k = 0; k < c->n_verbs; k++) fprintf(t, " %s", c->verbs[k].name);
+        fputc('\n', t);
+        op_put_names(t, "states", c->state_names, c->n_states, 0);
+        op_put_names(t, "rules", c->rule_names, c->n_rules, 0);
+        fputs("statuses", t);
+        for (size_t k = 0; k < c->n_extra_statuses; k++)
+            fprintf(t, " %s=%" PRId32, c->extra_statuses[k].name, c->extra_statuses[k].value);
+        fputc('\n', t);
+    }
+    fclose(t);
+    const size_t text_words = (text_len + 8u) / 8u;
+    const size_t ctrl_at = OP_HEADER_WORDS + text_words, ring_at = ctrl_at + d->n_ctrls * OP_N_FIELDS_;
+    op->words = ring_at + OP_RING * OP_SLOT_WORDS;
+    int fd = shm_open(op->name, O_RDWR | O_CREAT | O_EXCL, 0600);
+    if (fd < 0 && errno == EEXIST) {
+        /* Left by a Main Program that was killed?  Take it over; refuse a live one. */
+        int old = shm_open(op->name, O_RDONLY, 0);
+        uint64_t pid = 0;
+        struct stat sb;
+        if (old >= 0 && fstat(old, &sb) == 0 && sb.st_size >= (off_t)(8 * OP_HEADER_WORDS)) {
+            void *m = mmap(NULL, 8 * OP_HEADER_WORDS, PROT_READ, MAP_SHARED, old, 0);
+            if (m != MAP_FAILED) {
+                pid = op_ld((const uint64_t *)m + OP_PID);
+                munmap(m, 8 * OP_HEADER_WORDS);
+            }
+        }
+        if (old >= 0) close(old);
+        if (pid != 0 && (kill((pid_t)pid, 0) == 0 || errno != ESRCH)) {
+            fprintf(stderr, "rcs: --run %s: the run is in use by process %" PRIu64 " (shared memory `%s`)\n", run, pid,
+                    op->name);
+            free(text);
+            free(op);
+            return NULL;
+        }
+        shm_unlink(op->name);
+        fd = shm_open(op->name, O_RDWR | O_CREAT | O_EXCL, 0600);
+    }
+    if (fd < 0 || ftruncate(fd, (off_t)(op->words * 8u)) != 0) {
+        fprintf(stderr, "rcs: shared memory `%s`: %s\n", op->name, strerror(errno));
+        if (fd >= 0) {
+            close(fd);
+            shm_unlink(op->name);
+        }
+        free(text);
+        free(op);
+        return NULL;
+    }
+    void *p = mmap(NULL, op->words * 8u, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+    close(fd);
+    if (p == MAP_FAILED) {
+        fprintf(stderr, "rcs: shared memory `%s`: mmap: %s\n", op->name, strerror(errno));
+        shm_unlink(op->name);
+        free(text);
+        free(op);
+        return NULL;
+    }
+    op->w = p;
+    memcpy(op->w + OP_HEADER_WORDS, text, text_len);
+    free(text);
+    op->sched_at = xcalloc(d->n_ctrls + 1u, sizeof *op->sched_at);
+    for (size_t i = 0; i < d->n_ctrls; i++) op->sched_at[i] = SIZE_MAX;
+    for (size_t i = 0; i < d->n_schedule; i++) op->sched_at[d->schedule[i]] = i;
+    g_ctrl_paused = xcalloc(d->n_ctrls + 1u, 1);
+    g_ctrl_steps = xcalloc(d->n_ctrls + 1u, sizeof *g_ctrl_steps);
+    const uint64_t hdr[] = {0, 1, op->words, (uint64_t)getpid(), d->n_ctrls, OP_N_FIELDS_, 0, 0, OP_RUNNING,
+                            (uint64_t)d->period_ns, 0, 0, OP_RING, OP_SLOT_WORDS, OP_HEADER_WORDS, text_len,
+                            ctrl_at, ring_at};
+    for (size_t i = 1; i < sizeof hdr / sizeof hdr[0]; i++) op_st(&op->w[i], hdr[i]);
+    op_st(&op->w[OP_MAGIC], OP_MAGIC_WORD);
+    return op;
+}
+
+/* The status table and the program's words, under the seqlock. */
+static void op_publish(operator_seg *op, const rcs_design *d, const step_stats *st, uint64_t cycle, int run_state,
+                       int64_t max_work, uint64_t overruns) {
+    uint64_t seq = op_ld(&op->w[OP_SEQ]);
+    __atomic_store_n(&op->w[OP_SEQ], seq + 1u, __ATOMIC_RELAXED);
+    __atomic_thread_fence(__ATOMIC_RELEASE);
+    uint64_t *row = op->w + op_ld(&op->w[OP_CTRL_AT]);
+    for (size_t i = 0; i < d->n_ctrls; i++, row += OP_N_FIELDS_) {
+        const rcs_ctrl *c = &d->ctrls[i];
+        const rcs_status_head *s = c->status;
+        const step_stats *t = op->sched_at[i] == SIZE_MAX ? NULL : &st[op->sched_at[i]];
+        uint64_t v[OP_N_FIELDS_];
+        memset(v, 0, sizeof v);
+        v[OF_VERB] = (uint64_t)(int64_t)s->verb;
+        v[OF_STATE] = (uint64_t)(int64_t)s->state;
+        v[OF_STATUS] = (uint64_t)(int64_t)s->status;
+        v[OF_RULE] = (uint64_t)(int64_t)s->rule;
+        v[OF_ECHO] = s->echo_serial;
+        v[OF_ERROR_CODE] = (uint64_t)(int64_t)s->error_code;
+        v[OF_MODE] = g_ctrl_paused[i];
+        v[OF_PENDING_STEPS] = g_ctrl_steps[i];
+        if (t != NULL && t->n > 0) {
+            v[OF_STEPS] = t->n;
+            v[OF_LAST_NS] = (uint64_t)t->last;
+            v[OF_MIN_NS] = (uint64_t)t->min;
+            v[OF_MAX_NS] = (uint64_t)t->max;
+            v[OF_MEAN_NS] = (uint64_t)(t->sum / (int64_t)t->n);
+            v[OF_OVERRUNS] = t->overruns;
+        }
+        v[OF_BUDGET_NS] = (uint64_t)c->budget_ns;
+        for (size_t k = 0; k < OP_N_FIELDS_; k++) __atomic_store_n(&row[k], v[k], __ATOMIC_RELAXED);
+    }
+    __atomic_store_n(&op->w[OP_CYCLE], cycle, __ATOMIC_RELAXED);
+    __atomic_store_n(&op->w[OP_RUN_STATE], (uint64_t)run_state, __ATOMIC_RELAXED);
+    __atomic_store_n(&op->w[OP_MAX_WORK], (uint64_t)max_work, __ATOMIC_RELAXED);
+    __atomic_store_n(&op->w[OP_CYCLE_OVERRUNS], overruns, __ATOMIC_RELAXED);
+    op_st(&op->w[OP_SEQ], seq + 2u);
+}
+
+/* A whole number 0..max at *p (advanced past it and one space); -1 if none. */
+static int op_number(const char **p, uint64_t max, uint64_t *out) {
+    const char *s = *p;
+    uint64_t v = 0;
+    size_t k = 0;
+    for (; s[k] >= '0' && s[k] <= '9'; k++) {
+        if (v > (max - (uint64_t)(s[k] - '0')) / 10u) return 0;
+        v = v * 10u + (uint64_t)(s[k] - '0');
+    }
+    if (k == 0 || (s[k] != '\0' && s[k] != ' ')) return 0;
+    *p = s + k + (s[k] == ' ');
+    *out = v;
+    return 1;
+}
+
+/* Serves one request: returns 1 (done) or 0 with a reason in `why`. */
+static int op_request(const rcs_design *d, console *con, uint64_t cycle, char *text, size_t len, char *why,
+                      size_t why_size) {
+    const char *p = text;
+    uint64_t n = 0, id = 0;
+    if (strncmp(text, "events\n", 7) == 0) {
+        char *msg = NULL;
+        size_t msg_len = 0;
+        FILE *err = open_memstream(&msg, &msg_len);
+        if (err == NULL) out_of_memory();
+        rcs_scenario *sc = scenario_parse("<console>", text + 7, len - 7, d, err);
+        fclose(err);
+        if (sc == NULL) {
+            snprintf(why, why_size, "%s", msg ? msg : "the event record was refused");
+            free(msg);
+            return 0;
+        }
+        free(msg);
+        /* Applied now, stamped with the cycle about to run. */
+        for (size_t i = 0; i < sc->n_inputs; i++) sc->inputs[i].cycle = cycle + 1u;
+        for (size_t i = 0; i < sc->n_commands; i++) sc->commands[i].cycle = cycle + 1u;
+        rcs_scenario_apply(sc, d, cycle + 1u);
+        rcs_scenario_free(sc);
+        return 1;
+    }
+    if (strcmp(text, "pause") == 0) {
+        con->paused = 1;
+        con->step = 0;
+        return 1;
+    }
+    if (strcmp(text, "resume") == 0) {
+        con->paused = 0;
+        con->step = 0;
+        return 1;
+    }
+    if (strcmp(text, "quit") == 0) {
+        con->quit = 1;
+        return 1;
+    }
+    if (strncmp(text, "step ", 5) == 0) {
+        p = text + 5;
+        if (!op_number(&p, UINT32_MAX, &n) || *p || n == 0) return snprintf(why, why_size, "bad step count"), 0;
+        con->paused = 1;
+        con->step += n;
+        return 1;
+    }
+    if (strncmp(text, "mode ", 5) == 0) {
+        p = text + 5;
+        if (!op_number(&p, UINT32_MAX, &id) || id >= d->n_ctrls)
+            return snprintf(why, why_size, "no controller %" PRIu64, id), 0;
+        if (strcmp(p, "run") == 0) {
+            g_ctrl_paused[id] = 0;
+            g_ctrl_steps[id] = 0;
+        } else if (strcmp(p, "pause") == 0) {
+            g_ctrl_paused[id] = 1;
+            g_ctrl_steps[id] = 0;
+        } else if (strncmp(p, "step ", 5) == 0) {
+            p += 5;
+            if (!op_number(&p, UINT32_MAX, &n) || *p || n == 0) return snprintf(why, why_size, "bad step count"), 0;
+            g_ctrl_paused[id] = 1;
+            g_ctrl_steps[id] += n;
+        } else {
+            return snprintf(why, why_size, "unknown mode `%.40s`", p), 0;
+        }
+        return 1;
+    }
+    snprintf(why, why_size, "unknown request `%.40s`", text);
+    return 0;
+}
+
+/* Serves the requests waiting in the ring; returns how many. */
+static size_t op_serve(operator_seg *op, const rcs_design *d, console *con, uint64_t cycle) {
+    size_t served = 0;
+    const uint64_t ring_at = op_ld(&op->w[OP_RING_AT]);
+    while (op->served < op_ld(&op->w[OP_REQ_HEAD])) {
+        uint64_t *slot = op->w + ring_at + (size_t)(op->served % OP_RING) * OP_SLOT_WORDS;
+        if (op_ld(&slot[0]) != op->served + 1u) break; /* not written yet */
+        const size_t cap = (OP_SLOT_WORDS - 4u) * 8u;
+        size_t len = (size_t)op_ld(&slot[1]);
+        if (len >= cap) len = cap - 1u;
+        char *text = xcalloc(1, cap + 1u);
+        for (size_t i = 0; i < (len + 7u) / 8u; i++) {
+            uint64_t wd = __atomic_load_n(&slot[4 + i], __ATOMIC_RELAXED);
+            memcpy(text + 8u * i, &wd, 8u);
+        }
+        text[len] = '\0';
+        char why[1024] = "";
+        const int ok = op_request(d, con, cycle, text, len, why, sizeof why);
+        const size_t wl = ok ? 0u : strlen(why);
+        memset(text, 0, cap);
+        memcpy(text, why, wl);
+        for (size_t i = 0; i < (wl + 8u) / 8u; i++) {
+            uint64_t wd;
+            memcpy(&wd, text + 8u * i, 8u);
+            __atomic_store_n(&slot[4 + i], wd, __ATOMIC_RELAXED);
+        }
+        __atomic_store_n(&slot[1], wl, __ATOMIC_RELAXED);
+        op_st(&slot[2], ok ? 1u : 2u);
+        free(text);
+        op->served++;
+        op_st(&op->w[OP_REQ_DONE], op->served);
+        served++;
+    }
+    return served;
+}
+
+/* Marks the run finished and removes the segment's name. */
+static void op_close(operator_seg *op) {
+    if (op == NULL) return;
+    op_st(&op->w[OP_PID], 0);
+    shm_unlink(op->name);
+    munmap(op->w, op->words * 8u);
+    free(op->sched_at);
+    free(op);
 }
 
 static size_t round8(size_t n) { return (n + 7u) / 8u * 8u; }
@@ -1218,6 +1572,39 @@ done:
     return status;
 }
 
+/* `--init VERB`: sends VERB to every top controller (not a simulator) that
+ * accepts it, on this CPU.  With `check` only checks that one does and that
+ * VERB takes no parameters (1), or says why not (0). */
+static int send_init(const rcs_design *d, const char *verb, int check) {
+    size_t sent = 0;
+    for (size_t i = 0; i < d->n_ctrls; i++) {
+        const rcs_ctrl *c = &d->ctrls[i];
+        if (!c->top || c->simulator || (d->multi && !placed_here(d->multi, i))) continue;
+        for (size_t k = 0; k < c->n_verbs; k++) {
+            if (strcmp(c->verbs[k].name, verb) != 0) continue;
+            if (c->verbs[k].n_params) {
+                if (check)
+                    fprintf(stderr, "rcs: --init %s: `%s.%s` takes parameters; send it from `rcsc console`\n", verb,
+                            c->name, verb);
+                return 0;
+            }
+            if (!check) {
+                event e;
+                memset(&e, 0, sizeof e);
+                e.target = i;
+                e.verb = k;
+                apply_command(d, &e);
+            }
+            sent++;
+        }
+    }
+    if (sent == 0 && check && d->multi == NULL) {
+        fprintf(stderr, "rcs: --init %s: no top controller accepts the verb `%s`\n", verb, verb);
+        return 0;
+    }
+    return 1;
+}
+
 int rcs_main(int argc, char **argv, const rcs_design *d) {
     const char *prog = argc > 0 && argv[0] ? argv[0] : "rcs";
     options opt;
@@ -1240,11 +1627,15 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
         fprintf(stderr, "rcs: --domain is for the CPUs of a design built with `--transport dds`\n");
         return 2;
     }
-    if (d->multi == NULL && (opt.lockstep || opt.run)) {
-        fprintf(stderr, "rcs: --lockstep and --run are for the CPUs of a multi-CPU design; %s has one CPU\n",
-                d->design);
+    if (d->multi == NULL && opt.lockstep) {
+        fprintf(stderr, "rcs: --lockstep is for the CPUs of a multi-CPU design; %s has one CPU\n", d->design);
         return 2;
     }
+    if (d->multi && opt.paused) {
+        fprintf(stderr, "rcs: --paused is for a single-CPU design (the CPUs of %s start together)\n", d->design);
+        return 2;
+    }
+    if (opt.init && !send_init(d, opt.init, 1)) return 2;
 
     rcs_scenario *sc = NULL;
     if (opt.scenario) {
@@ -1284,6 +1675,7 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
 
     console con;
     memset(&con, 0, sizeof con);
+    operator_seg *op = NULL;
     if (!opt.no_console && d->multi == NULL && isatty(STDIN_FILENO) && tcgetattr(STDIN_FILENO, &g_saved_tty) == 0) {
         struct termios raw = g_saved_tty;
         raw.c_lflag &= ~(tcflag_t)(ICANON | ECHO); /* keys one by one, not echoed; ISIG stays (Ctrl-C) */
@@ -1296,6 +1688,27 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
             fputs("rcs: console: p or space pause/resume, s single step while paused, q quit\n", stderr);
         }
     }
+    if (d->multi == NULL && opt.run) {
+        op = op_open(d, opt.run);
+        if (op == NULL) {
+            restore_tty();
+            if (trace && trace != stdout) fclose(trace);
+            rcs_scenario_free(sc);
+            return 2;
+        }
+    }
+    if (opt.paused) {
+        if (!con.on && op == NULL) {
+            fputs("rcs: --paused needs a console to resume from: a terminal, or --run ID for `rcsc console`\n", stderr);
+            restore_tty();
+            if (trace && trace != stdout) fclose(trace);
+            rcs_scenario_free(sc);
+            return 2;
+        }
+        con.paused = 1;
+        fputs("rcs: paused before cycle 1\n", stderr);
+    }
+    if (opt.init) send_init(d, opt.init, 0);
 
     step_stats *st = xcalloc(d->n_schedule, sizeof *st);
     const int64_t period = d->period_ns > 0 ? d->period_ns : 1;
@@ -1322,16 +1735,22 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
     while (d->multi == NULL) {
         if (g_stop || (limit && cycle >= limit)) break;
         if (stop_tick && cycle + 1u >= stop_tick) break; /* `stop CPU`: no more cycles */
-        if (con.on) {
-            console_poll(&con, 0, cycle);
-            if (con.paused) {
-                while (con.on && con.paused && !con.step && !con.quit && !g_stop) console_poll(&con, 100, cycle);
-                /* A pause is not an overrun: the heartbeat starts again now. */
-                deadline = now_ns();
+        if (op) op_serve(op, d, &con, cycle);
+        if (con.on) console_poll(&con, 0, cycle);
+        if ((con.on || op) && con.paused && !con.step) {
+            if (op) op_publish(op, d, st, cycle, OP_PAUSED, max_work, cycle_overruns);
+            while ((con.on || op) && con.paused && !con.step && !con.quit && !g_stop) {
+                if (con.on)
+                    console_poll(&con, op ? 10 : 100, cycle);
+                else
+                    sleep_until(now_ns() + 10000000);
+                if (op && op_serve(op, d, &con, cycle)) op_publish(op, d, st, cycle, OP_PAUSED, max_work, cycle_overruns);
             }
-            con.step = 0;
-            if (con.quit || g_stop) break;
+            /* A pause is not an overrun: the heartbeat starts again now. */
+            deadline = now_ns();
         }
+        if (con.step) con.step--;
+        if (con.quit || g_stop) break;
 
         const int64_t t0 = now_ns();
         cycle++;
@@ -1342,6 +1761,7 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
         if (trace) rcs_trace_line(trace, d, cycle);
         const int64_t t1 = now_ns();
         if (t1 - t0 > max_work) max_work = t1 - t0;
+        if (op) op_publish(op, d, st, cycle, con.paused ? OP_PAUSED : OP_RUNNING, max_work, cycle_overruns);
 
         if (opt.fast) {
             if (t1 - t0 > period) cycle_overruns++; /* no deadlines: the work alone against the period */
@@ -1366,6 +1786,11 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
         if (trace != stdout && fclose(trace) != 0) status = 1;
     }
     restore_tty();
+    if (op) {
+        op_serve(op, d, &con, cycle);
+        op_publish(op, d, st, cycle, OP_FINISHED, max_work, cycle_overruns);
+        op_close(op);
+    }
     if (!opt.no_timing) timing_table(d, st, cycle, max_work, cycle_overruns, tot.missing);
     free(st);
     rcs_scenario_free(sc);
