@@ -116,11 +116,20 @@ class Segment:
         if self.word(H_MAGIC) != MAGIC or self.word(H_VERSION) != 1 or self.word(H_WORDS) * 8 != size:
             self.close()
             raise ConsoleError("E0810", f"{path} is not an operator segment of this rcsc version")
-        text_at, text_bytes = self.word(H_TEXT_AT), self.word(H_TEXT_BYTES)
-        text = self.mm[text_at * 8 : text_at * 8 + text_bytes].decode("ascii", "replace")
+        self.text_read = 0
         self.info: dict[str, str] = {}
         self.fields: list[str] = []
         self.ctrls: list[CtrlInfo] = []
+        self.read_text()
+
+    def read_text(self) -> None:
+        """The names: written at start-up, and (Rust) a state or rule name
+        appended as `state CTRL ID NAME` when first seen."""
+        text_at, text_bytes = self.word(H_TEXT_AT), self.word(H_TEXT_BYTES)
+        if text_bytes == self.text_read:
+            return
+        text = self.mm[text_at * 8 + self.text_read : text_at * 8 + text_bytes].decode("ascii", "replace")
+        self.text_read = text_bytes
         for line in text.splitlines():
             key, _, rest = line.partition(" ")
             words = rest.split()
@@ -132,9 +141,12 @@ class Segment:
                 setattr(self.ctrls[-1], key, ["" if w == "-" else w for w in words])
             elif key == "statuses" and self.ctrls:
                 self.ctrls[-1].statuses = {int(v): n for n, v in (w.split("=") for w in words)}
+            elif key in ("state", "rule") and len(words) == 3 and words[0].isdigit() and words[1].isdigit():
+                names = getattr(self.ctrls[int(words[0])], key + "s")
+                names.extend([""] * (int(words[1]) + 1 - len(names)))
+                names[int(words[1])] = words[2]
             else:
                 self.info[key] = rest
-        self.served = self.word(H_REQ_DONE)
 
     def word(self, i: int) -> int:
         return struct.unpack_from("<Q", self.mm, 8 * i)[0]
@@ -166,6 +178,7 @@ class Segment:
             head = [self.word(i) for i in (H_CYCLE, H_RUN_STATE, H_MAX_WORK, H_CYCLE_OVERRUNS)]
             if self.word(H_SEQ) == s0:
                 break
+        self.read_text()
         rows = [{f: _signed(raw[i * nf + k]) for k, f in enumerate(self.fields)} for i in range(n)]
         return Snapshot(head[0], RUN_STATES.get(head[1], str(head[1])), head[2], head[3], rows)
 

@@ -16,6 +16,7 @@
 // A design uses only some of the kinds, options and helpers.
 #![allow(dead_code, unused_imports)]
 
+mod console;
 mod launch;
 mod multi;
 mod scenario;
@@ -252,6 +253,10 @@ struct Options {
     no_console: bool,
     help: bool,
     lockstep: bool,
+    /// `--paused`: start paused.
+    paused: bool,
+    /// `--init VERB`: sent to the top controllers at start-up.
+    init: Option<String>,
     /// 0: not given.
     cycles: u64,
     scenario: Option<String>,
@@ -274,11 +279,18 @@ fn usage(prog: &str, d: &DesignDesc) -> String {
          --realtime        lock memory and run under SCHED_FIFO (needs privileges)\n  \
          --no-timing       do not print the timing table at exit\n  \
          --no-console      no keyboard console (p/space pause, s step, q quit)\n  \
+         --init VERB       send VERB (no parameters) to the top controllers at start-up\n  \
+         --paused          start paused (resume from the console)\n  \
          --help            show this text\n",
         d.design,
         d.cpu,
         us(d.period_ns)
-    ) + if d.multi.is_some() {
+    ) + if d.multi.is_none() {
+        "  --run ID          publish the status and take requests for `rcsc console` in\n                    \
+         the shared memory /rcs-<design>-<ID>.console (docs/console.md)\n"
+    } else {
+        ""
+    } + if d.multi.is_some() {
         "One CPU of a multi-CPU design (start them all with the launcher, run_<design>):\n  \
          --run ID          the run shared by the CPUs (names the shared memory or DDS partition)\n  \
          --domain N        the DDS domain id (a build with --transport dds; default: from the design's name)\n  \
@@ -313,8 +325,9 @@ fn parse_options(args: &[String]) -> Result<Options, String> {
             "--no-timing" if val.is_none() => o.no_timing = true,
             "--no-console" if val.is_none() => o.no_console = true,
             "--lockstep" if val.is_none() => o.lockstep = true,
+            "--paused" if val.is_none() => o.paused = true,
             "--help" | "-h" if val.is_none() => o.help = true,
-            "--cycles" | "--scenario" | "--trace" | "--run" | "--domain" => {
+            "--cycles" | "--scenario" | "--trace" | "--run" | "--domain" | "--init" => {
                 if val.is_none() {
                     match it.next() {
                         Some(v) => val = Some(v.clone()),
@@ -333,6 +346,7 @@ fn parse_options(args: &[String]) -> Result<Options, String> {
                     },
                     "--scenario" => o.scenario = Some(val),
                     "--run" => o.run = Some(val),
+                    "--init" => o.init = Some(val),
                     "--domain" => match val
                         .parse::<u8>()
                         .ok()
@@ -453,7 +467,8 @@ fn timing_table(
 struct ConsoleState {
     on: bool,
     paused: bool,
-    step: bool,
+    /// Cycles to run while paused (single steps).
+    step: u64,
     quit: bool,
 }
 
@@ -467,7 +482,7 @@ impl ConsoleState {
                 say!("rcs: resumed after cycle {cycle}");
             }
         } else if k == b's' && self.paused {
-            self.step = true;
+            self.step = 1;
         } else if k == b'q' {
             self.quit = true;
         }
@@ -525,6 +540,9 @@ fn run_schedule(
         if frozen > 0 && frozen <= tick {
             continue;
         }
+        if console::held(c) {
+            continue;
+        }
         let s0 = Instant::now();
         design.step(c, cycle);
         let dt = since(s0, Instant::now());
@@ -539,6 +557,38 @@ fn run_schedule(
             s.overruns = s.overruns.saturating_add(1);
         }
     }
+}
+
+/// `--init VERB`: sends VERB to every top controller (not a simulator) that
+/// accepts it, on this CPU.  With `check` only checks that one does and that
+/// VERB takes no parameters, or says why not.
+fn send_init(design: &mut dyn HostDesign, verb: &str, check: bool) -> Result<(), String> {
+    let d = design.desc();
+    let mut sent = 0;
+    for (i, c) in d.ctrls.iter().enumerate() {
+        let here = d.multi.is_none_or(|m| m.ctrls_here.contains(&i));
+        if !c.top || c.simulator || !here {
+            continue;
+        }
+        if let Some(k) = c.verbs.iter().position(|v| v.name == verb) {
+            if !c.verbs[k].params.is_empty() {
+                return Err(format!(
+                    "rcs: --init {verb}: `{}.{verb}` takes parameters; send it from `rcsc console`",
+                    c.name
+                ));
+            }
+            if !check {
+                design.command(i, k, &[]);
+            }
+            sent += 1;
+        }
+    }
+    if sent == 0 && check && d.multi.is_none() {
+        return Err(format!(
+            "rcs: --init {verb}: no top controller accepts the verb `{verb}`"
+        ));
+    }
+    Ok(())
 }
 
 /// Runs the Main Program: parses `std::env::args()`, returns the exit status.
@@ -568,12 +618,25 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
         say!("rcs: --domain is for the CPUs of a design built with `--transport dds`");
         return 2;
     }
-    if d.multi.is_none() && (opt.lockstep || opt.run.is_some()) {
+    if d.multi.is_none() && opt.lockstep {
         say!(
-            "rcs: --lockstep and --run are for the CPUs of a multi-CPU design; {} has one CPU",
+            "rcs: --lockstep is for the CPUs of a multi-CPU design; {} has one CPU",
             d.design
         );
         return 2;
+    }
+    if d.multi.is_some() && opt.paused {
+        say!(
+            "rcs: --paused is for a single-CPU design (the CPUs of {} start together)",
+            d.design
+        );
+        return 2;
+    }
+    if let Some(verb) = &opt.init {
+        if let Err(message) = send_init(design, verb, true) {
+            say!("{message}");
+            return 2;
+        }
     }
 
     let mut sc: Option<Scenario> = None;
@@ -639,6 +702,27 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
             say!("rcs: console: p or space pause/resume, s single step while paused, q quit");
         }
     }
+    let mut op = None;
+    if let (None, Some(run)) = (d.multi, &opt.run) {
+        match console::Operator::open(&*design, run) {
+            Ok(o) => op = Some(o),
+            Err(message) => {
+                say!("{message}");
+                return 2;
+            }
+        }
+    }
+    if opt.paused {
+        if !con.on && op.is_none() {
+            say!("rcs: --paused needs a console to resume from: a terminal, or --run ID for `rcsc console`");
+            return 2;
+        }
+        con.paused = true;
+        say!("rcs: paused before cycle 1");
+    }
+    if let Some(verb) = &opt.init {
+        let _ = send_init(design, verb, false);
+    }
 
     let mut st = vec![StepStats::default(); d.schedule.len()];
     let period = d.period_ns.max(1);
@@ -672,19 +756,34 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
         if stop_tick > 0 && cycle.saturating_add(1) >= stop_tick {
             break;
         }
+        if let Some(o) = op.as_mut() {
+            o.serve(design, &mut con, cycle);
+        }
         if con.on {
             con.poll(&mut tty, 0, cycle);
-            if con.paused {
-                while con.on && con.paused && !con.step && !con.quit && !sys::stop_requested() {
-                    con.poll(&mut tty, 100, cycle);
+        }
+        if (con.on || op.is_some()) && con.paused && con.step == 0 {
+            if let Some(o) = op.as_mut() {
+                o.publish(&*design, &st, cycle, console::PAUSED, max_work, cycle_overruns);
+            }
+            while (con.on || op.is_some()) && con.paused && con.step == 0 && !con.quit && !sys::stop_requested() {
+                if con.on {
+                    con.poll(&mut tty, if op.is_some() { 10 } else { 100 }, cycle);
+                } else {
+                    std::thread::sleep(StdDuration::from_millis(10));
                 }
-                // A pause is not an overrun: the heartbeat starts again now.
-                deadline = since(base, Instant::now());
+                if let Some(o) = op.as_mut() {
+                    if o.serve(design, &mut con, cycle) > 0 {
+                        o.publish(&*design, &st, cycle, console::PAUSED, max_work, cycle_overruns);
+                    }
+                }
             }
-            con.step = false;
-            if con.quit || sys::stop_requested() {
-                break;
-            }
+            // A pause is not an overrun: the heartbeat starts again now.
+            deadline = since(base, Instant::now());
+        }
+        con.step = con.step.saturating_sub(1);
+        if con.quit || sys::stop_requested() {
+            break;
         }
 
         let t0 = since(base, Instant::now());
@@ -712,6 +811,10 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
         let t1 = since(base, Instant::now());
         let work = t1.saturating_sub(t0);
         max_work = max_work.max(work);
+        if let Some(o) = op.as_mut() {
+            let state = if con.paused { console::PAUSED } else { console::RUNNING };
+            o.publish(&*design, &st, cycle, state, max_work, cycle_overruns);
+        }
 
         if opt.fast {
             // no deadlines: the work alone against the period
@@ -743,6 +846,10 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
         }
     }
     drop(tty); // restores the terminal
+    if let Some(mut o) = op.take() {
+        o.serve(design, &mut con, cycle);
+        o.publish(&*design, &st, cycle, console::FINISHED, max_work, cycle_overruns);
+    }
     if !opt.no_timing {
         say_raw(&timing_table(
             d,

@@ -361,6 +361,20 @@ impl Scenario {
         self.apply_ticks(design, cycle, cycle, None);
     }
 
+    /// Every input, then every command, now, inputs stamped with `tick` (a
+    /// request of `rcsc console`: one event, compiled like a scenario's).
+    pub fn apply_all(&self, design: &mut dyn HostDesign, tick: u64) {
+        for e in &self.inputs {
+            if let Some(v) = e.values.first() {
+                design.input(e.target, v);
+                design.set_gm_stamp(e.target, tick);
+            }
+        }
+        for e in &self.commands {
+            design.command(e.target, e.verb, &e.values);
+        }
+    }
+
     /// The inputs, then the commands (to the controllers in `here`, when
     /// given), of the ticks lo..=hi: what one release of a CPU sees.  An
     /// input is stamped with its tick.
