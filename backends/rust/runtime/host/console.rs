@@ -91,7 +91,13 @@ pub struct Operator {
 }
 
 /// The id of `name` in `names`, appending it (and its text line) when new.
-fn intern(names: &mut Vec<&'static str>, name: &'static str, line: &mut String, what: &str, ctrl: usize) -> u64 {
+fn intern(
+    names: &mut Vec<&'static str>,
+    name: &'static str,
+    line: &mut String,
+    what: &str,
+    ctrl: usize,
+) -> u64 {
     if let Some(i) = names.iter().position(|n| *n == name) {
         return i as u64;
     }
@@ -111,9 +117,10 @@ impl Operator {
     /// Creates and fills the segment of run `run`, or a message for stderr.
     pub fn open(design: &dyn HostDesign, run: &str) -> Result<Operator, String> {
         let d = design.desc();
-        let name = super::shm::segment_name(d.design, &format!("{run}.console")).ok_or_else(|| {
-            format!("rcs: --run needs an id of letters, digits, `_`, `.` and `-`, not `{run}`")
-        })?;
+        let name =
+            super::shm::segment_name(d.design, &format!("{run}.console")).ok_or_else(|| {
+                format!("rcs: --run needs an id of letters, digits, `_`, `.` and `-`, not `{run}`")
+            })?;
         let mut text = format!(
             "rcsc-console 1\ndesign {}\ncpu {}\nhash {}\nfields {}\n",
             d.design,
@@ -122,7 +129,11 @@ impl Operator {
             FIELDS.join(" ")
         );
         for c in d.ctrls {
-            text.push_str(&format!("ctrl {} {}\nverbs", c.name, if c.top { "top" } else { "sub" }));
+            text.push_str(&format!(
+                "ctrl {} {}\nverbs",
+                c.name,
+                if c.top { "top" } else { "sub" }
+            ));
             for v in c.verbs {
                 text.push_str(&format!(" {}", v.name));
             }
@@ -170,7 +181,11 @@ impl Operator {
             }
         }
         op.append(&text);
-        let _ = MODES.set((0..d.ctrls.len()).map(|_| (AtomicBool::new(false), AtomicU64::new(0))).collect());
+        let _ = MODES.set(
+            (0..d.ctrls.len())
+                .map(|_| (AtomicBool::new(false), AtomicU64::new(0)))
+                .collect(),
+        );
         let header: [(usize, u64); 17] = [
             (1, 1),
             (2, words as u64),
@@ -207,17 +222,27 @@ impl Operator {
         let first = self.text_len / 8;
         let last = (self.text_len + more.len()).div_ceil(8);
         for i in first..last {
-            bytes.extend_from_slice(&self.seg.word(self.text_at + i).load(Ordering::Relaxed).to_le_bytes());
+            bytes.extend_from_slice(
+                &self
+                    .seg
+                    .word(self.text_at + i)
+                    .load(Ordering::Relaxed)
+                    .to_le_bytes(),
+            );
         }
         let off = self.text_len - 8 * first;
         bytes.resize(8 * (last - first), 0);
         bytes[off..off + more.len()].copy_from_slice(more.as_bytes());
         for (k, w) in bytes.chunks(8).enumerate() {
             let word = u64::from_le_bytes(w.try_into().unwrap_or([0; 8]));
-            self.seg.word(self.text_at + first + k).store(word, Ordering::Relaxed);
+            self.seg
+                .word(self.text_at + first + k)
+                .store(word, Ordering::Relaxed);
         }
         self.text_len += more.len();
-        self.seg.word(H_TEXT_BYTES).store(self.text_len as u64, Ordering::Release);
+        self.seg
+            .word(H_TEXT_BYTES)
+            .store(self.text_len as u64, Ordering::Release);
     }
 
     /// The status table and the program's words, under the seqlock.
@@ -263,21 +288,35 @@ impl Operator {
         std::sync::atomic::fence(Ordering::Release);
         for (i, v) in rows.iter().enumerate() {
             for (k, x) in v.iter().enumerate() {
-                self.seg.word(self.ctrl_at + i * FIELDS.len() + k).store(*x, Ordering::Relaxed);
+                self.seg
+                    .word(self.ctrl_at + i * FIELDS.len() + k)
+                    .store(*x, Ordering::Relaxed);
             }
         }
         self.seg.word(H_CYCLE).store(cycle, Ordering::Relaxed);
-        self.seg.word(H_RUN_STATE).store(run_state, Ordering::Relaxed);
-        self.seg.word(H_MAX_WORK).store(max_work as u64, Ordering::Relaxed);
-        self.seg.word(H_CYCLE_OVERRUNS).store(overruns, Ordering::Relaxed);
+        self.seg
+            .word(H_RUN_STATE)
+            .store(run_state, Ordering::Relaxed);
+        self.seg
+            .word(H_MAX_WORK)
+            .store(max_work as u64, Ordering::Relaxed);
+        self.seg
+            .word(H_CYCLE_OVERRUNS)
+            .store(overruns, Ordering::Relaxed);
         self.seg.word(H_SEQ).store(seq + 2, Ordering::Release);
     }
 
     /// Serves one request: Ok, or the reason it is refused.
-    fn request(design: &mut dyn HostDesign, con: &mut Control, cycle: u64, text: &str) -> Result<(), String> {
+    fn request(
+        design: &mut dyn HostDesign,
+        con: &mut Control,
+        cycle: u64,
+        text: &str,
+    ) -> Result<(), String> {
         let d = design.desc();
         if let Some(events) = text.strip_prefix("events\n") {
-            let sc = Scenario::parse(events.as_bytes(), d).map_err(|e| format!("<console>:{}: error: {}", e.line, e.message))?;
+            let sc = Scenario::parse(events.as_bytes(), d)
+                .map_err(|e| format!("<console>:{}: error: {}", e.line, e.message))?;
             // Applied now, stamped with the cycle about to run.
             sc.apply_all(design, cycle + 1);
             return Ok(());
@@ -319,7 +358,12 @@ impl Operator {
                     _ => return Err(format!("unknown mode `{}`", mode.join(" "))),
                 }
             }
-            _ => return Err(format!("unknown request `{}`", text.chars().take(40).collect::<String>())),
+            _ => {
+                return Err(format!(
+                    "unknown request `{}`",
+                    text.chars().take(40).collect::<String>()
+                ))
+            }
         }
         Ok(())
     }
@@ -336,7 +380,13 @@ impl Operator {
             let len = (self.seg.word(slot + 1).load(Ordering::Relaxed) as usize).min(cap - 1);
             let mut bytes = Vec::with_capacity(len + 8);
             for i in 0..len.div_ceil(8) {
-                bytes.extend_from_slice(&self.seg.word(slot + 4 + i).load(Ordering::Relaxed).to_le_bytes());
+                bytes.extend_from_slice(
+                    &self
+                        .seg
+                        .word(slot + 4 + i)
+                        .load(Ordering::Relaxed)
+                        .to_le_bytes(),
+                );
             }
             bytes.truncate(len);
             let text = String::from_utf8_lossy(&bytes).into_owned();
@@ -351,9 +401,13 @@ impl Operator {
                 self.seg.word(slot + 4 + k).store(word, Ordering::Relaxed);
             }
             self.seg.word(slot + 1).store(wl as u64, Ordering::Relaxed);
-            self.seg.word(slot + 2).store(if result.is_ok() { 1 } else { 2 }, Ordering::Release);
+            self.seg
+                .word(slot + 2)
+                .store(if result.is_ok() { 1 } else { 2 }, Ordering::Release);
             self.served += 1;
-            self.seg.word(H_REQ_DONE).store(self.served, Ordering::Release);
+            self.seg
+                .word(H_REQ_DONE)
+                .store(self.served, Ordering::Release);
             served += 1;
         }
         served

@@ -764,9 +764,21 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
         }
         if (con.on || op.is_some()) && con.paused && con.step == 0 {
             if let Some(o) = op.as_mut() {
-                o.publish(&*design, &st, cycle, console::PAUSED, max_work, cycle_overruns);
+                o.publish(
+                    &*design,
+                    &st,
+                    cycle,
+                    console::PAUSED,
+                    max_work,
+                    cycle_overruns,
+                );
             }
-            while (con.on || op.is_some()) && con.paused && con.step == 0 && !con.quit && !sys::stop_requested() {
+            while (con.on || op.is_some())
+                && con.paused
+                && con.step == 0
+                && !con.quit
+                && !sys::stop_requested()
+            {
                 if con.on {
                     con.poll(&mut tty, if op.is_some() { 10 } else { 100 }, cycle);
                 } else {
@@ -774,7 +786,14 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
                 }
                 if let Some(o) = op.as_mut() {
                     if o.serve(design, &mut con, cycle) > 0 {
-                        o.publish(&*design, &st, cycle, console::PAUSED, max_work, cycle_overruns);
+                        o.publish(
+                            &*design,
+                            &st,
+                            cycle,
+                            console::PAUSED,
+                            max_work,
+                            cycle_overruns,
+                        );
                     }
                 }
             }
@@ -812,7 +831,11 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
         let work = t1.saturating_sub(t0);
         max_work = max_work.max(work);
         if let Some(o) = op.as_mut() {
-            let state = if con.paused { console::PAUSED } else { console::RUNNING };
+            let state = if con.paused {
+                console::PAUSED
+            } else {
+                console::RUNNING
+            };
             o.publish(&*design, &st, cycle, state, max_work, cycle_overruns);
         }
 
@@ -848,7 +871,14 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
     drop(tty); // restores the terminal
     if let Some(mut o) = op.take() {
         o.serve(design, &mut con, cycle);
-        o.publish(&*design, &st, cycle, console::FINISHED, max_work, cycle_overruns);
+        o.publish(
+            &*design,
+            &st,
+            cycle,
+            console::FINISHED,
+            max_work,
+            cycle_overruns,
+        );
     }
     if !opt.no_timing {
         say_raw(&timing_table(
