@@ -456,6 +456,7 @@ def _add_console_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("path", metavar="DESIGN", help="the design's root file (the one the running Main Program was built from)")
     p.add_argument("--run", dest="run_id", metavar="ID", help="the run id the Main Program was started with (`--run ID`); default: the only one running")
     p.add_argument("--color", choices=("auto", "always", "never"), default="auto", help="colour diagnostics (default: auto)")
+    p.add_argument("--screen", action="store_true", help="full-screen view on a terminal: the live status table above the command line")
 
 
 def _run_console(args: argparse.Namespace) -> int:
@@ -478,6 +479,10 @@ def _run_console(args: argparse.Namespace) -> int:
                 )
             run = runs[0]
         tty = sys.stdin.isatty() and sys.stdout.isatty()
+        if args.screen:
+            if not tty:
+                raise UsageError("--screen needs a terminal; without it the console reads commands line by line")
+            return console.run_screen(design, run)
         if tty:
             try:
                 import readline  # noqa: F401  (line editing and history for input())

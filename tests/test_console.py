@@ -254,3 +254,40 @@ def test_init_option_sends_the_verb_at_start_up(builds: Builds, target: str) -> 
     # --paused with nothing to resume from is refused rather than hanging.
     stuck = subprocess.run([str(exe), "--paused", "--cycles", "1"], capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
     assert stuck.returncode == 2 and "--paused needs a console" in stuck.stderr
+
+
+def test_full_screen_view_on_a_pty(builds: Builds) -> None:
+    """`--screen` (curses): the table is drawn, typed lines reach the program
+    (checked afterwards from a line-mode console), `exit` leaves it running."""
+    import fcntl
+    import struct
+    import termios
+
+    with Running(main_program(builds, "c"), "--paused") as prog:
+        master, slave = pty.openpty()
+        fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 30, 140, 0, 0))
+        con = subprocess.Popen([*RCSC, "console", str(SUBMARINE), "--run", prog.run, "--screen"], stdin=slave,
+                               stdout=slave, stderr=slave, cwd=ROOT, close_fds=True, env=dict(os.environ, TERM="xterm"))
+        os.close(slave)
+        try:
+            drawn = read_until(master, "budget_us")
+            for line in ("SM.INIT()", "step 4", "pause TB"):
+                os.write(master, (line + "\r").encode())
+                time.sleep(0.5)
+            os.write(master, b"exit\r")
+            assert con.wait(timeout=30) == 0
+        finally:
+            if con.poll() is None:
+                con.kill()
+            os.close(master)
+        assert "controller" in drawn and "Traceback" not in drawn
+        r = console_pipes(prog.run, "status\nquit\n")
+    row = tables(r.stdout)[0]
+    assert (row["SM"]["verb"], row["SM"]["status"], row["TB"]["mode"]) == ("INIT", "DONE", "paused")
+    assert row["_program"]["line"].startswith("cycle 4, paused")
+
+
+def test_screen_needs_a_terminal() -> None:
+    r = subprocess.run([*RCSC, "console", str(SUBMARINE), "--run", "x", "--screen"], capture_output=True, text=True,
+                       input="", timeout=60, cwd=ROOT)
+    assert r.returncode == 2 and "--screen needs a terminal" in r.stderr and "Traceback" not in r.stderr

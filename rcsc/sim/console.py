@@ -407,3 +407,57 @@ def run_console(design, run: str, lines, out, color: bool = False, prompt: bool 
         return 0
     finally:
         seg.close()
+
+
+def run_screen(design, run: str) -> int:
+    """The full-screen view (stdlib curses): the status table refreshed five
+    times a second, the session's replies below it, the command line at the
+    bottom.  The same `Session` handles each line as in the line mode."""
+    import curses
+    import io
+
+    seg = Segment(design.name, run)
+    replies = io.StringIO()
+    try:
+        session = Session(design, seg, replies)
+        log = [f"rcsc console: {design.name} on {seg.info.get('cpu')}, run `{run}`; type `help`, `exit` to leave"]
+
+        def screen(scr) -> None:
+            scr.timeout(200)
+            typed = ""
+            while True:
+                height, width = scr.getmaxyx()
+                table = format_table(seg, seg.snapshot()).splitlines()
+                scr.erase()
+                rows = table[: max(height - 3, 1)]
+                for y, text in enumerate(rows):
+                    scr.addnstr(y, 0, text, max(width - 1, 1), curses.A_BOLD if y == 0 else curses.A_NORMAL)
+                room = height - len(rows) - 2
+                for k, text in enumerate(log[-room:] if room > 0 else []):
+                    scr.addnstr(len(rows) + 1 + k, 0, text, max(width - 1, 1))
+                scr.addnstr(height - 1, 0, "> " + typed, max(width - 1, 1))
+                scr.refresh()
+                try:
+                    ch = scr.get_wch()
+                except curses.error:
+                    continue  # no key within 200 ms: refresh the table
+                if ch in ("\n", "\r") or ch == curses.KEY_ENTER:
+                    log.append("> " + typed)
+                    go_on = session.handle(typed)
+                    log.extend(replies.getvalue().rstrip("\n").splitlines())
+                    replies.seek(0)
+                    replies.truncate()
+                    typed = ""
+                    if not go_on:
+                        return
+                elif ch in ("\x7f", "\b") or ch == curses.KEY_BACKSPACE:
+                    typed = typed[:-1]
+                elif ch == "\x04" and not typed:
+                    return
+                elif isinstance(ch, str) and ch.isprintable():
+                    typed += ch
+
+        curses.wrapper(screen)
+        return 0
+    finally:
+        seg.close()
