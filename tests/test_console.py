@@ -291,3 +291,21 @@ def test_screen_needs_a_terminal() -> None:
     r = subprocess.run([*RCSC, "console", str(SUBMARINE), "--run", "x", "--screen"], capture_output=True, text=True,
                        input="", timeout=60, cwd=ROOT)
     assert r.returncode == 2 and "--screen needs a terminal" in r.stderr and "Traceback" not in r.stderr
+
+
+@pytest.mark.parametrize("target", TARGETS)
+def test_the_program_refuses_bad_requests_with_a_reason(builds: Builds, target: str) -> None:
+    """The runtime's side of the ring: what the console never sends is refused, with the reason."""
+    from rcsc.sim.console import Segment
+
+    with Running(main_program(builds, target), "--paused") as prog:
+        seg = Segment("submarine", prog.run)
+        try:
+            assert seg.request("mode 99 run") == "no controller 99"
+            assert seg.request("step 0") == "bad step count"
+            assert seg.request("fly") == "unknown request `fly`"
+            why = seg.request("events\nrcsc-events 1 submarine 0000000000000000\ncycles 1\nend 0\n")
+            assert why is not None and "<console>:1: error: the event file is for design `submarine` (interface 0000000000000000)" in why
+            assert seg.request("mode 2 pause") is None and seg.snapshot().rows[2]["mode"] == 1
+        finally:
+            seg.close()

@@ -352,7 +352,7 @@ class Session:
             if n is not None:
                 start = self.seg.word(H_CYCLE)
                 if self.send(line, f"step {n}"):
-                    self.wait_cycles(start, n)
+                    self.wait_cycles(start, n, timeout=10.0 + 2 * n * self.seg.word(H_PERIOD) / 1e9)
         elif head in ("pause", "run", "step") and len(words) in (2, 3) and re.fullmatch(r"[A-Za-z_]\w*", words[1]):
             if head != "step" and len(words) == 3:
                 return self.problem("E0812", line, f"`{head} NODE` takes no count", "unexpected word") or True
