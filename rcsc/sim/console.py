@@ -108,11 +108,18 @@ class Segment:
         except OSError as exc:
             os.close(self.fd)
             raise ConsoleError("E0816", f"another console is attached to run `{run}`") from exc
+        # A program that is starting sizes the segment, then writes its
+        # header, the magic word last: give it a second.
+        give_up = time.monotonic() + 1.0
+        while os.fstat(self.fd).st_size < HEADER_WORDS * 8 and time.monotonic() < give_up:
+            time.sleep(0.01)
         size = os.fstat(self.fd).st_size
         if size < HEADER_WORDS * 8:
             os.close(self.fd)
             raise ConsoleError("E0810", f"{path} is not an operator segment (too small)")
         self.mm = mmap.mmap(self.fd, size)
+        while self.word(H_MAGIC) == 0 and time.monotonic() < give_up:
+            time.sleep(0.01)
         if self.word(H_MAGIC) != MAGIC or self.word(H_VERSION) != 1 or self.word(H_WORDS) * 8 != size:
             self.close()
             raise ConsoleError("E0810", f"{path} is not an operator segment of this rcsc version")
