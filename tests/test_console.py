@@ -309,3 +309,24 @@ def test_the_program_refuses_bad_requests_with_a_reason(builds: Builds, target: 
             assert seg.request("mode 2 pause") is None and seg.snapshot().rows[2]["mode"] == 1
         finally:
             seg.close()
+
+
+def test_a_program_built_from_another_interface_is_refused(builds: Builds) -> None:
+    """E0811: the console compiles ids and bit patterns for the interface the
+    program publishes; another hash (an older build) is refused at attach."""
+    import io
+
+    from rcsc.driver import check_path
+    from rcsc.sim.console import ConsoleError, Segment, Session
+
+    design = check_path(str(SUBMARINE)).model
+    with Running(main_program(builds, "c"), "--paused") as prog:
+        seg = Segment("submarine", prog.run)
+        try:
+            Session(design, seg, io.StringIO())  # the same build: accepted
+            seg.info["hash"] = "0123456789abcdef"
+            with pytest.raises(ConsoleError) as err:
+                Session(design, seg, io.StringIO())
+            assert err.value.code == "E0811"
+        finally:
+            seg.close()
