@@ -1579,7 +1579,7 @@ static int send_init(const rcs_design *d, const char *verb, int check) {
     size_t sent = 0;
     for (size_t i = 0; i < d->n_ctrls; i++) {
         const rcs_ctrl *c = &d->ctrls[i];
-        if (!c->top || c->simulator || (d->multi && !placed_here(d->multi, i))) continue;
+        if (!c->top || c->simulator) continue;
         for (size_t k = 0; k < c->n_verbs; k++) {
             if (strcmp(c->verbs[k].name, verb) != 0) continue;
             if (c->verbs[k].n_params) {
@@ -1588,7 +1588,7 @@ static int send_init(const rcs_design *d, const char *verb, int check) {
                             c->name, verb);
                 return 0;
             }
-            if (!check) {
+            if (!check && (d->multi == NULL || placed_here(d->multi, i))) {
                 event e;
                 memset(&e, 0, sizeof e);
                 e.target = i;
@@ -1598,7 +1598,7 @@ static int send_init(const rcs_design *d, const char *verb, int check) {
             sent++;
         }
     }
-    if (sent == 0 && check && d->multi == NULL) {
+    if (sent == 0 && check) {
         fprintf(stderr, "rcs: --init %s: no top controller accepts the verb `%s`\n", verb, verb);
         return 0;
     }

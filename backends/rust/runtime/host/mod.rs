@@ -566,8 +566,7 @@ fn send_init(design: &mut dyn HostDesign, verb: &str, check: bool) -> Result<(),
     let d = design.desc();
     let mut sent = 0;
     for (i, c) in d.ctrls.iter().enumerate() {
-        let here = d.multi.is_none_or(|m| m.ctrls_here.contains(&i));
-        if !c.top || c.simulator || !here {
+        if !c.top || c.simulator {
             continue;
         }
         if let Some(k) = c.verbs.iter().position(|v| v.name == verb) {
@@ -577,13 +576,13 @@ fn send_init(design: &mut dyn HostDesign, verb: &str, check: bool) -> Result<(),
                     c.name
                 ));
             }
-            if !check {
+            if !check && d.multi.is_none_or(|m| m.ctrls_here.contains(&i)) {
                 design.command(i, k, &[]);
             }
             sent += 1;
         }
     }
-    if sent == 0 && check && d.multi.is_none() {
+    if sent == 0 && check {
         return Err(format!(
             "rcs: --init {verb}: no top controller accepts the verb `{verb}`"
         ));
