@@ -91,6 +91,16 @@ def _signed(v: int) -> int:
     return v - (1 << 64) if v >= 1 << 63 else v
 
 
+def request_check(number: int, data: bytes) -> int:
+    """FNV-1a over a request's number, its length and its bytes (the slot's
+    check word: the program serves a request only once it matches, so a
+    request whose bytes are not all visible yet waits for the next poll)."""
+    h = 0xCBF29CE484222325
+    for b in struct.pack("<QQ", number, len(data)) + data:
+        h = ((h ^ b) * 0x100000001B3) & 0xFFFFFFFFFFFFFFFF
+    return h
+
+
 class Segment:
     """A Main Program's operator segment, mapped read-write."""
 
@@ -198,7 +208,7 @@ class Segment:
         number = self.word(H_REQ_HEAD)
         base = 8 * (ring_at + (number % slots) * slot_words)
         self.mm[base + 32 : base + 32 + len(data) + 1] = data + b"\0"
-        struct.pack_into("<QQ", self.mm, base + 8, len(data), 0)
+        struct.pack_into("<QQQ", self.mm, base + 8, len(data), 0, request_check(number + 1, data))
         struct.pack_into("<Q", self.mm, base, number + 1)
         self.set_word(H_REQ_HEAD, number + 1)
         give_up = time.monotonic() + timeout

@@ -967,7 +967,9 @@ static void run_schedule(const rcs_design *d, const rcs_scenario *sc, step_stats
  *     op_fields[] lists, under the seqlock OP_SEQ (odd while written);
  *   ring (OP_RING_AT): OP_RING slots of OP_SLOT_WORDS words: ready (the
  *     request's number + 1), length in bytes, result (0 pending, 1 ok,
- *     2 refused), a spare word, then the request's text; the reply replaces it.
+ *     2 refused), check (op_check), then the request's text; the reply
+ *     replaces it.  A request whose check does not match has not all
+ *     arrived yet (the console's stores need not be seen in order).
  * A console writes a slot, sets its ready word, then advances OP_REQ_HEAD;
  * the Main Program serves requests in order and advances OP_REQ_DONE.
  */
@@ -1227,6 +1229,16 @@ static int op_request(const rcs_design *d, console *con, uint64_t cycle, char *t
     return 0;
 }
 
+/* FNV-1a over the request's number, its length and its bytes: the check
+ * word a console writes with each request. */
+static uint64_t op_check(uint64_t number, const char *text, size_t len) {
+    uint64_t h = UINT64_C(0xcbf29ce484222325);
+    for (int i = 0; i < 8; i++) h = (h ^ ((number >> (8 * i)) & 0xffu)) * UINT64_C(0x100000001b3);
+    for (int i = 0; i < 8; i++) h = (h ^ (((uint64_t)len >> (8 * i)) & 0xffu)) * UINT64_C(0x100000001b3);
+    for (size_t i = 0; i < len; i++) h = (h ^ (unsigned char)text[i]) * UINT64_C(0x100000001b3);
+    return h;
+}
+
 /* Serves the requests waiting in the ring; returns how many. */
 static size_t op_serve(operator_seg *op, const rcs_design *d, console *con, uint64_t cycle) {
     size_t served = 0;
@@ -1243,6 +1255,10 @@ static size_t op_serve(operator_seg *op, const rcs_design *d, console *con, uint
             memcpy(text + 8u * i, &wd, 8u);
         }
         text[len] = '\0';
+        if (op_ld(&slot[3]) != op_check(op->served + 1u, text, len)) {
+            free(text); /* not all of it has arrived yet: again at the next poll */
+            break;
+        }
         char why[1024] = "";
         const int ok = op_request(d, con, cycle, text, len, why, sizeof why);
         const size_t wl = ok ? 0u : strlen(why);

@@ -106,6 +106,23 @@ fn intern(
     (names.len() - 1) as u64
 }
 
+/// FNV-1a over the request's number, its length and its bytes: the check
+/// word a console writes with each request (its stores need not be seen in
+/// order, so a request whose check does not match has not all arrived).
+fn check(number: u64, text: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let len = text.len() as u64;
+    for b in number
+        .to_le_bytes()
+        .iter()
+        .chain(len.to_le_bytes().iter())
+        .chain(text)
+    {
+        h = (h ^ u64::from(*b)).wrapping_mul(0x0100_0000_01b3);
+    }
+    h
+}
+
 fn number(s: &str) -> Option<u64> {
     (!s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()))
         .then(|| s.parse::<u64>().ok())
@@ -389,6 +406,9 @@ impl Operator {
                 );
             }
             bytes.truncate(len);
+            if self.seg.word(slot + 3).load(Ordering::Acquire) != check(self.served + 1, &bytes) {
+                break; // not all of it has arrived yet: again at the next poll
+            }
             let text = String::from_utf8_lossy(&bytes).into_owned();
             let result = Self::request(design, con, cycle, &text);
             let why = result.as_ref().err().cloned().unwrap_or_default();
