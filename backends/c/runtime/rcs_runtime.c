@@ -911,7 +911,9 @@ static int stop_flag(void) { return g_stop != 0; }
 
 /* ---- performance (rcs_perf), overruns while running, worst case per (state, rule) ---- */
 
-/* Worst case of one (state, rule) of a controller; rule 0: a step in which no rule fired. */
+/* Worst case of one (verb, state, rule) of a controller: the running plan's
+ * verb after the step (0: none), the state the step began in ("new" when it
+ * took a new command) and the rule that fired (0: none). */
 typedef struct {
     uint64_t steps;
     int64_t max_ns, sum_ns;
@@ -919,7 +921,7 @@ typedef struct {
 
 static rcs_perf *g_perf;             /* per schedule entry */
 static int g_report_overruns;        /* overrun lines on stderr while running */
-static rule_stat **g_rules;          /* per schedule entry: n_states * n_rules, NULL: not kept */
+static rule_stat **g_rules;          /* per schedule entry: (n_verbs + 1) * n_states * n_rules, NULL: not kept */
 static int32_t *g_init_verb;         /* per schedule entry: the verb number of INIT, 0: none */
 static FILE *g_step_log;
 static FILE *g_perf_out;           /* --trace-perf */
@@ -940,7 +942,7 @@ static void perf_start(const rcs_design *d, const options *o) {
         for (size_t i = 0; i < d->n_schedule; i++) {
             const rcs_ctrl *c = &d->ctrls[d->schedule[i]];
             size_t ns = c->n_states ? c->n_states : 1u, nr = c->n_rules ? c->n_rules : 1u;
-            g_rules[i] = xcalloc(ns * nr, sizeof **g_rules);
+            g_rules[i] = xcalloc((c->n_verbs + 1u) * ns * nr, sizeof **g_rules);
         }
     }
 }
@@ -990,27 +992,29 @@ static int write_timing_out(const char *path, const rcs_design *d, uint64_t cycl
         put_json_str(f, c->name);
         uint64_t steps = 0;
         int64_t worst = 0;
-        size_t ns = c->n_states ? c->n_states : 1u, nr = c->n_rules ? c->n_rules : 1u;
-        for (size_t k = 0; k < ns * nr; k++) {
+        size_t ns = c->n_states ? c->n_states : 1u, nr = c->n_rules ? c->n_rules : 1u, nv = c->n_verbs + 1u;
+        for (size_t k = 0; k < nv * ns * nr; k++) {
             steps += g_rules[i][k].steps;
             if (g_rules[i][k].max_ns > worst) worst = g_rules[i][k].max_ns;
         }
         fprintf(f, ",\"budget_ns\":%" PRId64 ",\"steps\":%" PRIu64 ",\"max_ns\":%" PRId64 ",\"rules\":[", c->budget_ns,
                 steps, worst);
         int first = 1;
-        for (size_t st = 0; st < ns; st++)
-            for (size_t r = 0; r < nr; r++) {
-                const rule_stat *x = &g_rules[i][st * nr + r];
-                if (x->steps == 0) continue;
-                if (!first) fputc(',', f);
-                first = 0;
-                fputs("\n {\"state\":", f);
-                put_json_str(f, st < c->n_states ? c->state_names[st] : "");
-                fputs(",\"rule\":", f);
-                put_json_str(f, r < c->n_rules ? c->rule_names[r] : "");
-                fprintf(f, ",\"steps\":%" PRIu64 ",\"max_ns\":%" PRId64 ",\"mean_ns\":%" PRId64 "}", x->steps, x->max_ns,
-                        x->sum_ns / (int64_t)x->steps);
-            }
+        for (size_t k = 0; k < nv * ns * nr; k++) { /* verb, then state, then rule */
+            const rule_stat *x = &g_rules[i][k];
+            const size_t v = k / (ns * nr), st = k / nr % ns, r = k % nr;
+            if (x->steps == 0) continue;
+            if (!first) fputc(',', f);
+            first = 0;
+            fputs("\n {\"verb\":", f);
+            put_json_str(f, v ? c->verbs[v - 1u].name : "");
+            fputs(",\"state\":", f);
+            put_json_str(f, st < c->n_states ? c->state_names[st] : "");
+            fputs(",\"rule\":", f);
+            put_json_str(f, r < c->n_rules ? c->rule_names[r] : "");
+            fprintf(f, ",\"steps\":%" PRIu64 ",\"max_ns\":%" PRId64 ",\"mean_ns\":%" PRId64 "}", x->steps, x->max_ns,
+                    x->sum_ns / (int64_t)x->steps);
+        }
         fputs("]}", f);
     }
     fputs("\n]}\n", f);
@@ -1108,14 +1112,18 @@ static void run_schedule(const rcs_design *d, const rcs_scenario *sc, step_stats
             const size_t nr = c->n_rules ? c->n_rules : 1u, nst = c->n_states ? c->n_states : 1u;
             size_t from = taken ? 1u : (size_t)(state0 > 0 ? state0 : 0);
             size_t r = fired > 0 ? (size_t)fired : 0u;
+            size_t v = head->verb > 0 ? (size_t)head->verb : 0u;
             if (from >= nst) from = 0;
             if (r >= nr) r = 0;
-            rule_stat *x = &g_rules[i][from * nr + r];
+            if (v > c->n_verbs) v = 0;
+            rule_stat *x = &g_rules[i][(v * nst + from) * nr + r];
             x->steps++;
             x->sum_ns += dt;
             if (dt > x->max_ns) x->max_ns = dt;
             if (g_step_log) {
                 fputs(c->name, g_step_log);
+                fputc('\t', g_step_log);
+                fputs(v ? c->verbs[v - 1u].name : "", g_step_log);
                 fputc('\t', g_step_log);
                 fputs(from < c->n_states ? c->state_names[from] : "", g_step_log);
                 fputc('\t', g_step_log);

@@ -46,7 +46,9 @@ impl Perf {
     }
 }
 
-/// The worst case of one (state, rule) of a controller (rule 0: no rule fired).
+/// The worst case of one (verb, state, rule) of a controller: the running
+/// plan's verb after the step (0: none), the state the step began in ("new"
+/// when it took a new command) and the rule that fired (0: none).
 #[derive(Clone, Copy, Default)]
 struct RuleStat {
     steps: u64,
@@ -62,7 +64,7 @@ pub struct Stats {
     pub perf: Vec<Perf>,
     init_verb: Vec<i32>,
     report_overruns: bool,
-    /// Per schedule entry: n_states * n_rules (None: not kept).
+    /// Per schedule entry: (n_verbs + 1) * n_states * n_rules (None: not kept).
     rules: Option<Vec<Vec<RuleStat>>>,
     perf_out: Option<std::io::BufWriter<std::fs::File>>,
     step_log: Option<std::io::BufWriter<std::fs::File>>,
@@ -100,7 +102,9 @@ impl Stats {
             let (states, rule_names) = design.names(c);
             rules.push(vec![
                 RuleStat::default();
-                states.len().max(1) * rule_names.len().max(1)
+                (verbs.len() + 1)
+                    * states.len().max(1)
+                    * rule_names.len().max(1)
             ]);
         }
         Ok(Stats {
@@ -201,6 +205,7 @@ impl Stats {
             return;
         };
         let (states, rule_names) = design.names(c);
+        let verbs = d.ctrls.get(c).map_or(&[][..], |c| c.verbs);
         let (nst, nr) = (states.len().max(1), rule_names.len().max(1));
         let mut from = if taken {
             1
@@ -214,14 +219,23 @@ impl Stats {
         if r >= nr {
             r = 0;
         }
-        if let Some(x) = rules.get_mut(from * nr + r) {
+        let v = usize::try_from(verb)
+            .ok()
+            .filter(|&v| v <= verbs.len())
+            .unwrap_or(0);
+        let verb_name = if v > 0 {
+            verbs.get(v - 1).map_or("", |x| x.name)
+        } else {
+            ""
+        };
+        if let Some(x) = rules.get_mut((v * nst + from) * nr + r) {
             x.steps = x.steps.saturating_add(1);
             x.sum_ns = x.sum_ns.saturating_add(dt);
             x.max_ns = x.max_ns.max(dt);
         }
         if let Some(out) = self.step_log.as_mut() {
             let line = format!(
-                "{name}\t{}\t{}\n",
+                "{name}\t{verb_name}\t{}\t{}\n",
                 states.get(from).copied().unwrap_or(""),
                 rule_names.get(r).copied().unwrap_or("")
             );
@@ -308,7 +322,8 @@ impl Stats {
             let (name, budget) = d.ctrls.get(c).map_or(("", 0), |c| (c.name, c.budget_ns));
             let rules = self.rules.as_ref().and_then(|r| r.get(i)).unwrap_or(&empty);
             let (states, rule_names) = design.names(c);
-            let nr = rule_names.len().max(1);
+            let verbs = d.ctrls.get(c).map_or(&[][..], |c| c.verbs);
+            let (ns, nr) = (states.len().max(1), rule_names.len().max(1));
             if i > 0 {
                 s.push(',');
             }
@@ -329,10 +344,19 @@ impl Stats {
                     s.push(',');
                 }
                 first = false;
-                s.push_str("\n {\"state\":");
-                super::trace::json_str(&mut s, states.get(k / nr).copied().unwrap_or(""));
+                // verb, then state, then rule
+                let (v, st, r) = (k / (ns * nr), k / nr % ns, k % nr);
+                s.push_str("\n {\"verb\":");
+                let verb = if v > 0 {
+                    verbs.get(v - 1).map_or("", |x| x.name)
+                } else {
+                    ""
+                };
+                super::trace::json_str(&mut s, verb);
+                s.push_str(",\"state\":");
+                super::trace::json_str(&mut s, states.get(st).copied().unwrap_or(""));
                 s.push_str(",\"rule\":");
-                super::trace::json_str(&mut s, rule_names.get(k % nr).copied().unwrap_or(""));
+                super::trace::json_str(&mut s, rule_names.get(r).copied().unwrap_or(""));
                 let n = i64::try_from(x.steps).unwrap_or(i64::MAX).max(1);
                 let _ = write!(
                     s,
