@@ -368,6 +368,8 @@ def _add_sim_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scenario", metavar="FILE", required=True, help="the scenario to run (see docs/scenarios.md)")
     p.add_argument("--trace-format", choices=TRACE_FORMATS, default=None, help="trace format (default: from the -o suffix, else jsonl)")
     p.add_argument("-o", "--output", metavar="FILE", help="write the trace to FILE instead of stdout")
+    p.add_argument("--step-log", metavar="FILE", help="also write one line per step (controller, verb, state, rule) to FILE, "
+                   "as the compiled Main Program's --step-log")
 
 
 def _checked_scenario(design_path: str, scenario_path: str):
@@ -400,7 +402,10 @@ def _run_sim(args: argparse.Namespace) -> int:
     if loaded is None:
         return EXIT_FINDINGS
     design, sc = loaded
-    run = run_scenario(design, sc)
+    steps: list[str] | None = [] if args.step_log else None
+    run = run_scenario(design, sc, step_log=steps)
+    if steps is not None:
+        _emit_report("".join(x + "\n" for x in steps), args.step_log)
     fmt = args.trace_format
     if fmt is None:
         suffix = (args.output or "").rsplit(".", 1)[-1].lower()

@@ -12,7 +12,7 @@ performance window.  Checked on both targets:
   simulator's;
 - `--timing-out`: the worst case per (verb, state, rule), the same rows in C
   and Rust, and `rcsc budget --measured` flags R1 (E0840);
-- `--step-log`: the same lines in C and Rust;
+- `--step-log`: the same lines in C, Rust and `rcsc sim --step-log`;
 - `rcsc budget --callgrind`: instruction counts, identical on two runs.
 """
 
@@ -150,6 +150,10 @@ def test_worst_case_per_rule_in_c_and_rust_and_the_measured_budget_table(program
     c = _run(programs["c"], work, "c-rules", "--no-timing")[1]
     rs = _run(programs["rust"], work, "rust-rules", "--no-timing")[1]
     assert c["steps"].read_text() == rs["steps"].read_text()
+    # The simulator keys the steps the same way (rcsc sim --step-log).
+    sim_steps = work / "sim.steps"
+    assert cli.main(["sim", str(DESIGN), "--scenario", str(SCENARIO), "-o", os.devnull, "--step-log", str(sim_steps)]) == 0
+    assert sim_steps.read_text() == c["steps"].read_text()
     assert c["steps"].read_text().splitlines()[:3] == ["TOP\tINIT\tnew\tI0", "LOW\tINIT\tnew\tL0", "TOP\tINIT\tS1\tI1"]
     assert _shape(c["timing"].read_text()) == _shape(rs["timing"].read_text())
     doc = json.loads(c["timing"].read_text())
