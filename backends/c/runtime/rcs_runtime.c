@@ -973,8 +973,18 @@ static void perf_line(FILE *out, const rcs_design *d, uint64_t cycle) {
     fputs("}}\n", out);
 }
 
+/* A performance output's path: on a CPU of a multi-CPU design (every CPU
+ * gets the same options from the launcher) `PATH.CPU`. */
+static const char *perf_path(char *buf, size_t size, const char *path, const rcs_design *d) {
+    if (d->multi == NULL) return path;
+    snprintf(buf, size, "%s.%s", path, d->cpu ? d->cpu : "");
+    return buf;
+}
+
 /* The worst case per (state, rule) at exit (--timing-out), keys in a fixed order. */
-static int write_timing_out(const char *path, const rcs_design *d, uint64_t cycles) {
+static int write_timing_out(const char *given, const rcs_design *d, uint64_t cycles) {
+    char buf[4096];
+    const char *path = perf_path(buf, sizeof buf, given, d);
     FILE *f = fopen(path, "w");
     if (f == NULL) {
         fprintf(stderr, "rcs: cannot write the timing file `%s`: %s\n", path, strerror(errno));
@@ -1025,16 +1035,18 @@ static int write_timing_out(const char *path, const rcs_design *d, uint64_t cycl
     return 1;
 }
 
-static FILE *open_out(const char *path, const char *what) {
+static FILE *open_out(const char *given, const char *what, const rcs_design *d) {
+    char buf[4096];
+    const char *path = perf_path(buf, sizeof buf, given, d);
     FILE *f = fopen(path, "w");
     if (f == NULL) fprintf(stderr, "rcs: cannot write the %s `%s`: %s\n", what, path, strerror(errno));
     return f;
 }
 
 /* Opens --trace-perf and --step-log; 0 after a message. */
-static int perf_open(const options *o) {
-    if (o->trace_perf && (g_perf_out = open_out(o->trace_perf, "performance trace")) == NULL) return 0;
-    if (o->step_log && (g_step_log = open_out(o->step_log, "step log")) == NULL) return 0;
+static int perf_open(const options *o, const rcs_design *d) {
+    if (o->trace_perf && (g_perf_out = open_out(o->trace_perf, "performance trace", d)) == NULL) return 0;
+    if (o->step_log && (g_step_log = open_out(o->step_log, "step log", d)) == NULL) return 0;
     return 1;
 }
 
@@ -1515,7 +1527,7 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
 
     step_stats *st = xcalloc(d->n_schedule, sizeof *st);
     perf_start(d, &opt);
-    if (!perf_open(&opt)) {
+    if (!perf_open(&opt, d)) {
         if (trace && trace != stdout) fclose(trace);
         restore_tty();
         free(st);

@@ -71,6 +71,16 @@ pub struct Stats {
     failed: bool,
 }
 
+/// A performance output's path: on a CPU of a multi-CPU design (every CPU
+/// gets the same options from the launcher) `PATH.CPU`.
+pub fn cpu_path(path: &str, d: &DesignDesc) -> String {
+    if d.multi.is_some() {
+        format!("{path}.{}", d.cpu)
+    } else {
+        path.to_string()
+    }
+}
+
 fn create(path: &str, what: &str) -> Result<std::io::BufWriter<std::fs::File>, String> {
     std::fs::File::create(path)
         .map(|f| std::io::BufWriter::with_capacity(1 << 16, f))
@@ -118,9 +128,11 @@ impl Stats {
                 None
             },
             perf_out: perf_out
-                .map(|p| create(p, "performance trace"))
+                .map(|p| create(&cpu_path(p, d), "performance trace"))
                 .transpose()?,
-            step_log: step_log.map(|p| create(p, "step log")).transpose()?,
+            step_log: step_log
+                .map(|p| create(&cpu_path(p, d), "step log"))
+                .transpose()?,
             failed: false,
         })
     }
@@ -297,8 +309,9 @@ impl Stats {
             }
         }
         if let Some(path) = timing_out {
+            let path = cpu_path(path, design.desc());
             let text = self.timing_json(design, cycles);
-            if let Err(e) = std::fs::write(path, text) {
+            if let Err(e) = std::fs::write(&path, text) {
                 say!(
                     "rcs: cannot write the timing file `{path}`: {}",
                     super::strerror(&e)
