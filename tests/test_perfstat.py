@@ -212,3 +212,26 @@ def test_callgrind_counts_are_the_same_on_every_run(tmp_path: Path) -> None:
     # A tiny exchange rate of instructions to time flags nothing; a huge one flags every rule.
     r = _rcsc("budget", str(DESIGN), "--measured", str(tmp_path / "cg1.json"), "--ns-per-insn", "1000")
     assert r.returncode == 1 and "error[E0840]" in r.stderr and "ns per instruction" in r.stderr
+
+
+def test_each_cpu_of_a_multi_cpu_design_writes_its_own_run_file(tmp_path: Path) -> None:
+    """Under the launcher every CPU gets the same options: each writes FILE.CPU,
+    and `rcsc budget` takes one --measured per CPU."""
+    from rcsc.driver import check_path
+    from rcsc.sim import compiled
+
+    design_path = ROOT / "examples" / "machine_tool" / "machine_tool.rcs"
+    scn = sorted((design_path.parent / "scenarios").glob("*.scn"))[0]
+    design = check_path(str(design_path)).model
+    built = compiled.build(design, "c", str(tmp_path / "build"))
+    assert cli.main(["events", str(design_path), str(scn), "-o", str(tmp_path / "mt.events")]) == 0
+    run = tmp_path / "run.json"
+    r = subprocess.run([str(built.program), "--lockstep", "--no-timing", "--scenario", str(tmp_path / "mt.events"), "--timing-out", str(run)],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    files = [tmp_path / f"run.json.{cpu}" for cpu in design.cpus]
+    assert not run.exists() and all(f.is_file() for f in files)
+    assert sorted(json.loads(f.read_text())["cpu"] for f in files) == sorted(design.cpus)
+    r = _rcsc("budget", str(design_path), *[x for f in files for x in ("--measured", str(f))])
+    assert r.returncode == 0 and "warning[" not in r.stderr and "error[" not in r.stderr, r.stderr
+    assert r.stdout.count(": measured in ") == len(design.cpus)
