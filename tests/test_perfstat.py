@@ -1,7 +1,7 @@
 """Performance instrumentation of the compiled Main Program (C and Rust).
 
 tests/perf/perf.rcs: TOP's RUN plan calls an extern `spin` that busy-waits
-(tests/perf/perf_externs.c, externs_impl.rs) far beyond TOP's 2 us budget;
+(tests/perf/perf_externs.c, externs_impl.rs) far beyond TOP's 50 us budget;
 the scenario sends INIT at cycle 1, RUN at 3 (TOP overruns in cycles 4-8)
 and INIT again at 9, which restarts TOP's (and, passed down, LOW's)
 performance window.  Checked on both targets:
@@ -89,10 +89,10 @@ def test_perf_section_resets_on_init_and_leaves_the_trace_alone(programs, work: 
     assert all(list(p) == keys for x in lines for p in x["perf"].values())
     top = {x["cycle"]: x["perf"]["TOP"] for x in lines}
     low = {x["cycle"]: x["perf"]["LOW"] for x in lines}
-    # INIT at cycle 1 starts the window; RUN spins in cycles 4-8, far over 2 us.
+    # INIT at cycle 1 starts the window; RUN spins in cycles 4-8, far over 50 us.
     assert (top[3]["steps"], top[3]["overruns"], top[3]["since"]) == (3, 0, 1)
     assert (top[8]["steps"], top[8]["overruns"], top[8]["since"]) == (8, 5, 1)
-    assert top[8]["max_ns"] > 2000 and top[8]["min_ns"] <= top[8]["mean_ns"] <= top[8]["max_ns"]
+    assert top[8]["max_ns"] > 50000 and top[8]["min_ns"] <= top[8]["mean_ns"] <= top[8]["max_ns"]
     assert top[8]["mean_ns"] * 8 <= sum(top[k]["last_ns"] for k in range(1, 9)) < (top[8]["mean_ns"] + 1) * 8
     # The INIT at cycle 9 resets TOP's window and, passed down in the same cycle, LOW's.
     assert (top[9]["steps"], top[9]["overruns"], top[9]["since"]) == (1, 0, 9)
@@ -112,8 +112,8 @@ def test_overruns_are_reported_rate_limited(programs, work: Path, target: str) -
     assert len(over) == 3, r.stderr
     for line, (cycle, n) in zip(over, [(4, 1), (5, 2), (7, 4)]):
         assert line.startswith(f"rcs: overrun: TOP in cycle {cycle} took "), line
-        assert line.endswith(f" us, budget 2.000 us (overrun {n}; the next line at overrun {2 * n})"), line
-        assert float(line.split(" took ")[1].split(" us")[0]) > 2.0
+        assert line.endswith(f" us, budget 50.000 us (overrun {n}; the next line at overrun {2 * n})"), line
+        assert float(line.split(" took ")[1].split(" us")[0]) > 50.0
     # The lines come before the timing table (printed at exit) ...
     assert r.stderr.index("rcs: overrun:") < r.stderr.index("rcs: timing of")
     # ... and --no-timing silences both.
@@ -160,7 +160,7 @@ def test_worst_case_per_rule_in_c_and_rust_and_the_measured_budget_table(program
     top = doc["controllers"][0]
     rows = {(r["verb"], r["state"], r["rule"]): r for r in top["rules"]}
     assert set(rows) == {("RUN", "new", "R0"), ("RUN", "BUSY", "R1"), ("INIT", "new", "I0"), ("INIT", "S1", "I1"), ("INIT", "done", "")}
-    assert rows[("RUN", "BUSY", "R1")]["steps"] == 5 and rows[("RUN", "BUSY", "R1")]["max_ns"] == top["max_ns"] > 2000
+    assert rows[("RUN", "BUSY", "R1")]["steps"] == 5 and rows[("RUN", "BUSY", "R1")]["max_ns"] == top["max_ns"] > 50000
     for target, files in (("c", c), ("rust", rs)):
         r = _rcsc("budget", str(DESIGN), "--measured", str(files["timing"]))
         assert r.returncode == 1, (target, r.stdout, r.stderr)
@@ -210,7 +210,7 @@ def test_callgrind_counts_are_the_same_on_every_run(tmp_path: Path) -> None:
     assert top["steps"] == 12 and all(r["max_insn"] > 0 for r in top["rules"])
     assert {(r["verb"], r["state"], r["rule"]) for r in top["rules"]} >= {("RUN", "BUSY", "R1"), ("INIT", "new", "I0")}
     # A tiny exchange rate of instructions to time flags nothing; a huge one flags every rule.
-    r = _rcsc("budget", str(DESIGN), "--measured", str(tmp_path / "cg1.json"), "--ns-per-insn", "1000")
+    r = _rcsc("budget", str(DESIGN), "--measured", str(tmp_path / "cg1.json"), "--ns-per-insn", "100000")
     assert r.returncode == 1 and "error[E0840]" in r.stderr and "ns per instruction" in r.stderr
 
 
