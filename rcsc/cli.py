@@ -368,6 +368,8 @@ def _add_sim_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--scenario", metavar="FILE", required=True, help="the scenario to run (see docs/scenarios.md)")
     p.add_argument("--trace-format", choices=TRACE_FORMATS, default=None, help="trace format (default: from the -o suffix, else jsonl)")
     p.add_argument("-o", "--output", metavar="FILE", help="write the trace to FILE instead of stdout")
+    p.add_argument("--step-log", metavar="FILE", help="also write one line per step (controller, verb, state, rule) to FILE, "
+                   "as the compiled Main Program's --step-log")
 
 
 def _checked_scenario(design_path: str, scenario_path: str):
@@ -400,7 +402,10 @@ def _run_sim(args: argparse.Namespace) -> int:
     if loaded is None:
         return EXIT_FINDINGS
     design, sc = loaded
-    run = run_scenario(design, sc)
+    steps: list[str] | None = [] if args.step_log else None
+    run = run_scenario(design, sc, step_log=steps)
+    if steps is not None:
+        _emit_report("".join(x + "\n" for x in steps), args.step_log)
     fmt = args.trace_format
     if fmt is None:
         suffix = (args.output or "").rsplit(".", 1)[-1].lower()
@@ -563,19 +568,75 @@ def _run_test(args: argparse.Namespace) -> int:
 
 def _add_budget_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("path", metavar="DESIGN", help="the design's root file")
+    p.add_argument("--measured", metavar="RUN.json", action="append", default=[],
+                   help="a run file of the compiled Main Program (`--timing-out RUN.json`): the measured worst case per "
+                   "controller and per (verb, state, rule) beside the budgets (repeat for each CPU)")
+    p.add_argument("--callgrind", metavar="SCENARIO",
+                   help="measure instruction counts instead: build the C Main Program and run SCENARIO under "
+                   "valgrind's callgrind (the same counts on every run)")
+    p.add_argument("--ns-per-insn", metavar="NS", type=float, default=1.0,
+                   help="nanoseconds per instruction when instruction counts are compared with budgets (default: 1)")
+    p.add_argument("--timing-out", metavar="FILE", help="with --callgrind: also write the run file to FILE")
+    p.add_argument("--build-dir", metavar="DIR", default="build/rcsc-test", help="where --callgrind builds the design (default: build/rcsc-test)")
 
 
 def _run_budget(args: argparse.Namespace) -> int:
+    from rcsc.checks import measured
     from rcsc.checks.frames import format_budget_table
 
-    result = _check(args.path)
-    if result.model is None:
-        _report_to_stderr(result.diags)
-        return EXIT_FINDINGS
-    _write(sys.stdout, format_budget_table(result.model))
-    if result.diags.items:
-        _report_to_stderr(result.diags)
-    return _exit_code(result.diags, False)
+    if args.ns_per_insn <= 0:
+        raise UsageError("--ns-per-insn needs a positive number")
+    if args.timing_out and not args.callgrind:
+        raise UsageError("--timing-out writes the run file of --callgrind")
+    if not (args.measured or args.callgrind):
+        result = _check(args.path)
+        if result.model is None:
+            _report_to_stderr(result.diags)
+            return EXIT_FINDINGS
+        _write(sys.stdout, format_budget_table(result.model))
+        if result.diags.items:
+            _report_to_stderr(result.diags)
+        return _exit_code(result.diags, False)
+    runs: list[measured.Run] = []
+    diags = Diagnostics()
+    if args.callgrind:
+        from rcsc.sim import callgrind, compiled
+
+        loaded = _checked_scenario(args.path, args.callgrind)
+        if loaded is None:
+            return EXIT_FINDINGS
+        design, sc = loaded
+        try:
+            text = callgrind.measure(design, sc, args.build_dir)
+        except compiled.CompiledError as exc:
+            raise UsageError(f"--callgrind: {exc}") from exc
+        if args.timing_out:
+            _emit_report(text, args.timing_out)
+        run = measured.parse_run(args.timing_out or f"callgrind of {args.callgrind}", text, diags)
+        if run is not None:
+            runs.append(run)
+        result_diags = Diagnostics()
+    else:
+        result = _check(args.path)
+        if result.model is None or not result.ok:
+            _report_to_stderr(result.diags)
+            return EXIT_FINDINGS
+        design, result_diags = result.model, result.diags
+    for path in args.measured:
+        try:
+            text = safeio.read_input(path).decode("utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise UsageError(f"{path}: cannot read: {getattr(exc, 'strerror', None) or exc}") from exc
+        run = measured.parse_run(path, text, diags)
+        if run is not None:
+            runs.append(run)
+    measured.check(design, runs, diags, args.ns_per_insn)
+    _write(sys.stdout, format_budget_table(design))
+    _write(sys.stdout, measured.format_table(design, runs, args.ns_per_insn))
+    result_diags.extend(diags)
+    if result_diags.items:
+        _report_to_stderr(result_diags)
+    return _exit_code(result_diags, False)
 
 
 # ---------------------------------------------------------------------------

@@ -751,6 +751,56 @@ Fixed:
     cpu MAIN heartbeat 10 ms { ... }
     rcsc build cell.rcs --target c -o build/cell
 """),
+    # ---- measured timing (`rcsc budget --measured`) ------------------------
+    ("E0840", _E, "a measured worst case exceeds the budget", """
+`rcsc budget --measured RUN.json DESIGN` compares the step times the compiled
+Main Program measured (its `--timing-out RUN.json` file, or instruction
+counts from `rcsc budget --callgrind`) with the budgets the design declares.
+Each step is counted under the rule that fired in it (or under "no rule" for
+a step in which none fired): a rule whose worst step took longer than the
+controller's `budget` breaks the CPU budget check (E0600), which adds the
+declared budgets up on the promise that no step exceeds them.
+
+Wrong (rule R1 calls an extern that takes about 300 us):
+
+    controller TOP level 2 budget 2 us { ... R1: true | BUSY -> BUSY | x = spin(n); }
+
+Fixed (a budget that holds the measured worst case, with margin):
+
+    controller TOP level 2 budget 500 us { ... R1: true | BUSY -> BUSY | x = spin(n); }
+"""),
+    ("E0841", _E, "the run file does not fit the design", """
+A run file given to `rcsc budget --measured` must be one the compiled Main
+Program of this design wrote with `--timing-out` (or `rcsc budget --callgrind`
+made): JSON with `"format": "rcs-timing-1"`, the design's name, and only
+controllers the design has. A run of another design, of an older version of
+it with other controllers, or a file of another kind would put figures beside
+the wrong budgets.
+
+Wrong:
+
+    rcsc budget --measured build/other/run.json cell.rcs
+
+Fixed (measure this design's program):
+
+    ./cell_MAIN --scenario full_job.events --timing-out run.json --fast
+    rcsc budget --measured run.json cell.rcs
+"""),
+    ("W0841", _W, "a scheduled controller was never measured", """
+The run files given to `rcsc budget --measured` hold no step of a controller
+scheduled on a CPU they measured: its worst case is unknown, so the table can
+say nothing about its budget. The scenario was too short (a controller with
+`period 100 ms` on a 10 ms heartbeat steps every tenth cycle) or the
+controller was frozen by the scenario.
+
+Wrong (a 0-cycle run, or a scenario that ends before the controller is due):
+
+    cycles 0
+
+Fixed:
+
+    cycles 500
+"""),
     # ---- scenarios ----------------------------------------------------------
     ("E0700", _E, "operator command to a controller below the top", """
 Operator commands enter at the top of the hierarchy only (chain of command,

@@ -337,7 +337,8 @@ def test_timing_table_and_heartbeat(exe):
     elapsed = time.monotonic() - t0
     assert r.returncode == 0 and r.stdout == ""
     assert elapsed >= 0.019  # 20 cycles of 1 ms on absolute deadlines
-    lines = r.stderr.splitlines()
+    # (a step preempted past its budget adds an overrun line while running: tests/test_perfstat.py)
+    lines = [x for x in r.stderr.splitlines() if not x.startswith("rcs: overrun: ")]
     assert lines[0] == "rcs: timing of fixture on MAIN, 20 cycles, heartbeat 1000.0 us"
     assert lines[1].split() == ["controller", "budget", "last", "min", "max", "mean", "overruns"]
     t = r"\d+\.\d{3} us"
@@ -360,6 +361,7 @@ def test_sigint_finishes_the_cycle_and_prints_the_table(exe, tmp_path):
     p.send_signal(signal.SIGINT)
     stdout, stderr = p.communicate(timeout=10)
     assert p.returncode == 0 and stdout == ""
+    stderr = "".join(x for x in stderr.splitlines(keepends=True) if not x.startswith("rcs: overrun: "))
     m = re.match(r"rcs: timing of fixture on MAIN, (\d+) cycles, heartbeat 1000\.0 us\n", stderr)
     assert m, stderr
     text = out.read_text()
@@ -467,6 +469,7 @@ def test_clean_under_ubsan_and_asan(san_exe, tmp_path):
         assert (r.returncode, r.stderr.count("\n")) in ((0, 0), (2, 1)), (k, bad, r.stderr)
         assert r.returncode == 0 or ": error: " in r.stderr
     r = subprocess.run([str(san_exe), "--cycles", "3", "--no-console"], capture_output=True, text=True, env=env, stdin=subprocess.DEVNULL)
-    assert r.returncode == 0 and r.stderr.startswith("rcs: timing of fixture on MAIN, 3 cycles")
+    table = "".join(x for x in r.stderr.splitlines(keepends=True) if not x.startswith("rcs: overrun: "))
+    assert r.returncode == 0 and table.startswith("rcs: timing of fixture on MAIN, 3 cycles")
     r = subprocess.run([str(san_exe), "--bogus"], capture_output=True, text=True, env=env)
     assert r.returncode == 2 and r.stderr.startswith("rcs: unknown option `--bogus`\nusage: ")

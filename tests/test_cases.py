@@ -179,11 +179,29 @@ def _build_findings(root: Path, ok: bool, tmp: Path) -> Counter:
     )
 
 
+MEASURED = "measured.json"
+
+
+def _measured_findings(root: Path, ok: bool) -> Counter:
+    """Findings of `rcsc budget DESIGN --measured measured.json` for a folder with that run file."""
+    run = root.parent / MEASURED
+    if root.parent == CASES or not run.is_file() or not ok:
+        return Counter()
+    from rcsc import cli
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        cli.main(["budget", str(root), "--measured", str(run)])
+    return Counter(
+        (os.path.realpath(path), code, int(line), int(col)) for code, path, line, col in _RENDERED.findall(err.getvalue())
+    )
+
+
 @pytest.mark.parametrize("root", ROOTS, ids=[_case_id(r) for r in ROOTS])
 def test_case(root: Path, tmp_path: Path) -> None:
     result = _check(root)
     expected = _expected(root)
-    found = _found(result, _sim_findings(root, result.ok) + _build_findings(root, result.ok, tmp_path))
+    found = _found(result, _sim_findings(root, result.ok) + _build_findings(root, result.ok, tmp_path) + _measured_findings(root, result.ok))
     missing, extra = expected - found, found - expected
     if missing or extra:
         details = "\n".join(

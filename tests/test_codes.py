@@ -51,6 +51,7 @@ def test_docs_codes_md_is_generated_from_the_table(request) -> None:
 WITH_EXAMPLES = [
     "W0008", "W0403", "E0505", "W0515", "W0519", "W0520", "W0521", "W0522", "W0523",
     "W0524", "W0525", "W0526", "W0527", "W0540", "W0541", "W0542", "W0610", "E0611",
+    "E0840", "E0841", "W0841",
 ]
 
 

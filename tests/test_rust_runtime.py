@@ -257,7 +257,8 @@ def test_help_and_bad_options(crate: Crate) -> None:
 def test_timing_table(crate: Crate) -> None:
     proc = run(crate.release, "--fast", "--no-console", "--cycles", "5")
     assert proc.returncode == 0 and proc.stdout == ""
-    lines = proc.stderr.splitlines()
+    # (a step preempted past its budget adds an overrun line while running: tests/test_perfstat.py)
+    lines = [x for x in proc.stderr.splitlines() if not x.startswith("rcs: overrun: ")]
     assert lines[0] == "rcs: timing of fixture on MAIN, 5 cycles, heartbeat 1000.0 us"
     assert lines[1].split() == ["controller", "budget", "last", "min", "max", "mean", "overruns"]
     assert [line.split()[0] for line in lines[2:4]] == ["SUB", "TOP"]  # schedule order
@@ -286,6 +287,7 @@ def test_sigint_ends_an_unbounded_run_cleanly(crate: Crate) -> None:
     assert p.returncode == 0, err
     cycles = len(out.splitlines())
     assert cycles > 10 and out.endswith("\n")
+    err = "".join(x for x in err.splitlines(keepends=True) if not x.startswith("rcs: overrun: "))
     assert err.startswith(f"rcs: timing of fixture on MAIN, {cycles} cycles, heartbeat 1000.0 us\n"), err
 
 

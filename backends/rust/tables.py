@@ -208,6 +208,7 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
         views.append(fn_head(0, "", tg.n.status_view(c.name), [f"s: &{tg.n.ctrl_part(c.name, 'status')}"], "StatusView") + tail(view, 1) + ["}"])
 
     methods = _stamp_and_crossing_methods(mp, tg, ctrls)
+    methods += _perf_methods(tg, ctrls, index)
 
     # The controllers this CPU steps (the others' buffers are still here: copies).
     members = [{"name": _member(tg, c), "type": tg.tname(c.name), "module": tg.module(c)} for c in ctrls if c in schedule]
@@ -335,6 +336,25 @@ def _stamp_and_crossing_methods(mp: _Main, tg: RustTarget, ctrls: list[m.Control
     put = fn_head(1, "", "set_crossing", ["&mut self", "i: usize", "value: &Value", f"{stamp_param}: u64"], None) + [f"{pad(2)}match i {{"] + put
     put += [f"{pad(3)}_ => {{}}", f"{pad(2)}}}", f"{pad(1)}}}"]
     return out + [get, put]
+
+
+def _perf_methods(tg: RustTarget, ctrls: list[m.Controller], index: dict[str, int]) -> list[list[str]]:
+    """HostDesign's `head`, `set_rule` and `names`: what the Main Program reads
+    of each status head to keep the performance per controller and per
+    (state, rule) (host/perf.rs)."""
+    head = [f"{pad(1)}fn head(&self, ctrl: usize) -> (u32, i32, i32, i32) {{", f"{pad(2)}let h = match ctrl {{"]
+    put = [f"{pad(1)}fn set_rule(&mut self, ctrl: usize, rule: i32) {{", f"{pad(2)}let h = match ctrl {{"]
+    names = fn_head(1, "", "names", ["&self", "ctrl: usize"], "(&'static [&'static str], &'static [&'static str])")
+    names.append(f"{pad(2)}match ctrl {{")
+    for c in ctrls:
+        status = f"self.buf.{tg.n.buffer_member(c.name, 'status')}.head"
+        head += arm(str(index[c.name]), Unary("&", Atom(status)), 3)
+        put += arm(str(index[c.name]), Unary("&mut ", Atom(status)), 3)
+        names += arm(str(index[c.name]), Call("", [Atom(f"&{tg.n.ctrl_part(c.name, 'STATES')}"), Atom(f"&{tg.n.ctrl_part(c.name, 'RULES')}")]), 3)
+    head += arm("_", Atom("return (0, 0, 0, 0)"), 3) + [f"{pad(2)}}};", f"{pad(2)}(h.echo_serial, h.verb, h.state, h.rule)", f"{pad(1)}}}"]
+    put += arm("_", Atom("return"), 3) + [f"{pad(2)}}};", f"{pad(2)}h.rule = rule;", f"{pad(1)}}}"]
+    names += arm("_", Atom("(&[], &[])"), 3) + [f"{pad(2)}}}", f"{pad(1)}}}"]
+    return [head, put, names]
 
 
 def expr_stmt_lines(e: Node, indent: int) -> list[str]:

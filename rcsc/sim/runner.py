@@ -171,8 +171,12 @@ def observe(system: System) -> Snapshot:
     return observed_snapshot(system)
 
 
-def run_scenario(design: m.Design, sc: Scenario, externs: dict | None = None) -> RunResult:
+def run_scenario(design: m.Design, sc: Scenario, externs: dict | None = None, step_log: list[str] | None = None) -> RunResult:
+    """Runs `sc`; with `step_log`, appends a line per step to it (Simulator.step_log)."""
     system = System(design, externs)
+    if step_log is not None:
+        for sim in system.cpus.values():
+            sim.step_log = step_log
     snaps: list[Snapshot] = []
     cycles: list[CpuSnapshot] = []
     ran: list[Snapshot] = []

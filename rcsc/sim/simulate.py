@@ -175,6 +175,10 @@ class Simulator:
     copies of the buffers that other CPUs write.
     """
 
+    # When a list: one line per step, `CTRL<TAB>VERB<TAB>STATE<TAB>RULE` (the
+    # compiled Main Program's --step-log, docs/backends.md "Performance").
+    step_log: list[str] | None = None
+
     def __init__(self, design: m.Design, externs: dict | None = None, cpu: m.Cpu | None = None) -> None:
         self.design = design
         if cpu is None:
@@ -238,6 +242,9 @@ class Simulator:
         self.exec_block(c.pre, rt, env)
         # 3. New command: a new serial supersedes whatever ran before.
         st = rt.status
+        log = self.step_log
+        began = ("new" if rt.cmd.serial != st.echo_serial else st.state) if log is not None else ""
+        fired = ""
         if rt.cmd.serial != st.echo_serial:
             st.echo_serial = rt.cmd.serial
             st.status = m.EXEC
@@ -255,6 +262,7 @@ class Simulator:
             rule = self.select_rule(rt.plan, st.state, env)
             if rule is not None:
                 self.fire(rule, rt, env)
+                fired = rule.label
         # 5. Post.
         self.exec_block(c.post, rt, env)
         # 6. Write.
@@ -271,6 +279,8 @@ class Simulator:
             self.commands[sub] = CommandBuffer(serial, verb, args)
         # 7. Measure: the simulator counts steps; time is measured by the backends.
         rt.steps += 1
+        if log is not None:
+            log.append(f"{c.name}\t{st.verb or ''}\t{began}\t{fired}")
 
     def select_rule(self, plan: m.Plan, state: str, env: Env) -> m.Rule | None:
         """The first rule whose state matches and whose condition holds, else the state's `otherwise`."""

@@ -689,7 +689,10 @@ static void usage(FILE *o, const char *prog, const rcs_design *d) {
             "                    file from `rcsc events DESIGN SCENARIO -o FILE`\n"
             "  --trace FILE      write the JSON-lines trace to FILE (`-`: standard output)\n"
             "  --realtime        lock memory and run under SCHED_FIFO (needs privileges)\n"
-            "  --no-timing       do not print the timing table at exit\n"
+            "  --no-timing       no timing table at exit and no overrun lines while running\n"
+            "  --trace-perf FILE write each controller's performance per cycle to FILE (JSON lines)\n"
+            "  --timing-out FILE write the worst step time per (state, rule) to FILE at exit (JSON)\n"
+            "  --step-log FILE   write one line per step (controller, state, rule) to FILE\n"
             "  --no-console      no keyboard console (p/space pause, s step, q quit)\n"
             "  --init VERB       send VERB (no parameters) to the top controllers at start-up\n"
             "  --paused          start paused (resume from the console)\n"
@@ -802,6 +805,7 @@ typedef struct {
     int fast, realtime, no_timing, no_console, help, lockstep, paused;
     uint64_t cycles; /* 0: not given */
     const char *scenario, *trace, *run, *init;
+    const char *trace_perf, *timing_out, *step_log; /* performance outputs (NULL: none) */
     long domain; /* --domain: the DDS domain id, -1: not given */
 } options;
 
@@ -829,7 +833,8 @@ static int parse_options(int argc, char **argv, options *o) {
             o->paused = 1;
         else if ((IS("--help") || IS("-h")) && !val)
             o->help = 1;
-        else if (IS("--cycles") || IS("--scenario") || IS("--trace") || IS("--run") || IS("--domain") || IS("--init")) {
+        else if (IS("--cycles") || IS("--scenario") || IS("--trace") || IS("--run") || IS("--domain") || IS("--init") ||
+                 IS("--trace-perf") || IS("--timing-out") || IS("--step-log")) {
             if (!val) {
                 if (i + 1 >= argc) {
                     fprintf(stderr, "rcs: %s needs a value\n", a);
@@ -848,6 +853,12 @@ static int parse_options(int argc, char **argv, options *o) {
                 o->run = val;
             } else if (IS("--init")) {
                 o->init = val;
+            } else if (IS("--trace-perf")) {
+                o->trace_perf = val;
+            } else if (IS("--timing-out")) {
+                o->timing_out = val;
+            } else if (IS("--step-log")) {
+                o->step_log = val;
             } else if (IS("--domain")) {
                 uint64_t dom = 0;
                 if (!(strcmp(val, "0") == 0 || parse_count(val, &dom)) || dom > 232u) {
@@ -930,6 +941,164 @@ static int ctrl_held(size_t ctrl) {
     return 1;
 }
 
+/* ---- performance (rcs_perf), overruns while running, worst case per (state, rule) ---- */
+
+/* Worst case of one (verb, state, rule) of a controller: the running plan's
+ * verb after the step (0: none), the state the step began in ("new" when it
+ * took a new command) and the rule that fired (0: none). */
+typedef struct {
+    uint64_t steps;
+    int64_t max_ns, sum_ns;
+} rule_stat;
+
+static rcs_perf *g_perf;             /* per schedule entry */
+static int g_report_overruns;        /* overrun lines on stderr while running */
+static rule_stat **g_rules;          /* per schedule entry: (n_verbs + 1) * n_states * n_rules, NULL: not kept */
+static int32_t *g_init_verb;         /* per schedule entry: the verb number of INIT, 0: none */
+static FILE *g_step_log;
+static FILE *g_perf_out;           /* --trace-perf */
+
+const rcs_perf *rcs_perf_table(void) { return g_perf; }
+
+static void perf_start(const rcs_design *d, const options *o) {
+    g_perf = xcalloc(d->n_schedule, sizeof *g_perf);
+    g_init_verb = xcalloc(d->n_schedule, sizeof *g_init_verb);
+    g_report_overruns = !o->no_timing;
+    for (size_t i = 0; i < d->n_schedule; i++) {
+        const rcs_ctrl *c = &d->ctrls[d->schedule[i]];
+        for (size_t v = 0; v < c->n_verbs; v++)
+            if (strcmp(c->verbs[v].name, "INIT") == 0) g_init_verb[i] = (int32_t)(v + 1u);
+    }
+    if (o->timing_out || o->step_log) {
+        g_rules = xcalloc(d->n_schedule, sizeof *g_rules);
+        for (size_t i = 0; i < d->n_schedule; i++) {
+            const rcs_ctrl *c = &d->ctrls[d->schedule[i]];
+            size_t ns = c->n_states ? c->n_states : 1u, nr = c->n_rules ? c->n_rules : 1u;
+            g_rules[i] = xcalloc((c->n_verbs + 1u) * ns * nr, sizeof **g_rules);
+        }
+    }
+}
+
+static void perf_free(const rcs_design *d) {
+    if (g_rules)
+        for (size_t i = 0; i < d->n_schedule; i++) free(g_rules[i]);
+    free(g_rules);
+    free(g_init_verb);
+    g_rules = NULL;
+    g_init_verb = NULL;
+    /* g_perf stays: rcs_perf_table() may be read until exit */
+}
+
+/* One line of --trace-perf: every scheduled controller's rcs_perf after `cycle`. */
+static void perf_line(FILE *out, const rcs_design *d, uint64_t cycle) {
+    fprintf(out, "{\"cycle\":%" PRIu64 ",\"perf\":{", cycle);
+    for (size_t i = 0; i < d->n_schedule; i++) {
+        const rcs_perf *p = &g_perf[i];
+        if (i) fputc(',', out);
+        put_json_str(out, d->ctrls[d->schedule[i]].name);
+        fprintf(out,
+                ":{\"steps\":%" PRIu64 ",\"last_ns\":%" PRId64 ",\"min_ns\":%" PRId64 ",\"max_ns\":%" PRId64
+                ",\"mean_ns\":%" PRId64 ",\"overruns\":%" PRIu64 ",\"since\":%" PRIu64 "}",
+                p->steps, p->last_ns, p->min_ns, p->max_ns, p->steps ? p->sum_ns / (int64_t)p->steps : 0, p->overruns,
+                p->since);
+    }
+    fputs("}}\n", out);
+}
+
+/* A performance output's path: on a CPU of a multi-CPU design (every CPU
+ * gets the same options from the launcher) `PATH.CPU`. */
+static const char *perf_path(char *buf, size_t size, const char *path, const rcs_design *d) {
+    if (d->multi == NULL) return path;
+    snprintf(buf, size, "%s.%s", path, d->cpu ? d->cpu : "");
+    return buf;
+}
+
+/* The worst case per (state, rule) at exit (--timing-out), keys in a fixed order. */
+static int write_timing_out(const char *given, const rcs_design *d, uint64_t cycles) {
+    char buf[4096];
+    const char *path = perf_path(buf, sizeof buf, given, d);
+    FILE *f = fopen(path, "w");
+    if (f == NULL) {
+        fprintf(stderr, "rcs: cannot write the timing file `%s`: %s\n", path, strerror(errno));
+        return 0;
+    }
+    fputs("{\"format\":\"rcs-timing-1\",\"design\":", f);
+    put_json_str(f, d->design ? d->design : "");
+    fputs(",\"cpu\":", f);
+    put_json_str(f, d->cpu ? d->cpu : "");
+    fprintf(f, ",\"unit\":\"ns\",\"cycles\":%" PRIu64 ",\"controllers\":[", cycles);
+    for (size_t i = 0; i < d->n_schedule; i++) {
+        const rcs_ctrl *c = &d->ctrls[d->schedule[i]];
+        if (i) fputc(',', f);
+        fputs("\n{\"name\":", f);
+        put_json_str(f, c->name);
+        uint64_t steps = 0;
+        int64_t worst = 0;
+        size_t ns = c->n_states ? c->n_states : 1u, nr = c->n_rules ? c->n_rules : 1u, nv = c->n_verbs + 1u;
+        for (size_t k = 0; k < nv * ns * nr; k++) {
+            steps += g_rules[i][k].steps;
+            if (g_rules[i][k].max_ns > worst) worst = g_rules[i][k].max_ns;
+        }
+        fprintf(f, ",\"budget_ns\":%" PRId64 ",\"steps\":%" PRIu64 ",\"max_ns\":%" PRId64 ",\"rules\":[", c->budget_ns,
+                steps, worst);
+        int first = 1;
+        for (size_t k = 0; k < nv * ns * nr; k++) { /* verb, then state, then rule */
+            const rule_stat *x = &g_rules[i][k];
+            const size_t v = k / (ns * nr), st = k / nr % ns, r = k % nr;
+            if (x->steps == 0) continue;
+            if (!first) fputc(',', f);
+            first = 0;
+            fputs("\n {\"verb\":", f);
+            put_json_str(f, v ? c->verbs[v - 1u].name : "");
+            fputs(",\"state\":", f);
+            put_json_str(f, st < c->n_states ? c->state_names[st] : "");
+            fputs(",\"rule\":", f);
+            put_json_str(f, r < c->n_rules ? c->rule_names[r] : "");
+            fprintf(f, ",\"steps\":%" PRIu64 ",\"max_ns\":%" PRId64 ",\"mean_ns\":%" PRId64 "}", x->steps, x->max_ns,
+                    x->sum_ns / (int64_t)x->steps);
+        }
+        fputs("]}", f);
+    }
+    fputs("\n]}\n", f);
+    if (fclose(f) != 0) {
+        fprintf(stderr, "rcs: error writing the timing file `%s`\n", path);
+        return 0;
+    }
+    return 1;
+}
+
+static FILE *open_out(const char *given, const char *what, const rcs_design *d) {
+    char buf[4096];
+    const char *path = perf_path(buf, sizeof buf, given, d);
+    FILE *f = fopen(path, "w");
+    if (f == NULL) fprintf(stderr, "rcs: cannot write the %s `%s`: %s\n", what, path, strerror(errno));
+    return f;
+}
+
+/* Opens --trace-perf and --step-log; 0 after a message. */
+static int perf_open(const options *o, const rcs_design *d) {
+    if (o->trace_perf && (g_perf_out = open_out(o->trace_perf, "performance trace", d)) == NULL) return 0;
+    if (o->step_log && (g_step_log = open_out(o->step_log, "step log", d)) == NULL) return 0;
+    return 1;
+}
+
+/* Closes them and, at the end of a run (`done`), writes --timing-out; 0 after a message. */
+static int perf_close(const options *o, const rcs_design *d, uint64_t cycles, int done) {
+    int ok = 1;
+    FILE *const files[2] = {g_perf_out, g_step_log};
+    const char *const what[2] = {o->trace_perf, o->step_log};
+    for (int k = 0; k < 2; k++) {
+        if (files[k] == NULL) continue;
+        if (ferror(files[k]) || fclose(files[k]) != 0) {
+            fprintf(stderr, "rcs: error writing `%s`\n", what[k]);
+            ok = 0;
+        }
+    }
+    g_perf_out = g_step_log = NULL;
+    if (done && o->timing_out && !write_timing_out(o->timing_out, d, cycles)) ok = 0;
+    return ok;
+}
+
 /* Steps the controllers of the schedule due in `cycle` (their divider) and
  * not frozen at `tick`, timing each step. */
 static void run_schedule(const rcs_design *d, const rcs_scenario *sc, step_stats *st, uint64_t cycle, uint64_t tick) {
@@ -939,16 +1108,74 @@ static void run_schedule(const rcs_design *d, const rcs_scenario *sc, step_stats
         uint64_t frozen = rcs_scenario_freeze_tick(sc, d->schedule[i]);
         if (frozen && frozen <= tick) continue;
         if (ctrl_held(d->schedule[i])) continue;
+        /* Which rule fires: the status's rule is marked -1 before the step
+         * (a generated step writes it only when a rule fires or a command is
+         * taken) and put back when the step left it so. */
+        rcs_status_head *head = (rcs_status_head *)(uintptr_t)c->status;
+        const uint32_t echo0 = head->echo_serial;
+        const int32_t state0 = head->state, rule0 = head->rule;
+        if (g_rules) head->rule = -1;
         const int64_t s0 = now_ns();
         c->step(cycle);
         const int64_t dt = now_ns() - s0;
+        int32_t fired = 0;
+        if (g_rules) {
+            fired = head->rule;
+            if (fired == -1) {
+                head->rule = rule0;
+                fired = 0;
+            }
+        }
         step_stats *s = &st[i];
         s->last = dt;
         if (s->n == 0 || dt < s->min) s->min = dt;
         if (dt > s->max) s->max = dt;
         s->sum += dt;
         s->n++;
-        if (c->budget_ns > 0 && dt > c->budget_ns) s->overruns++;
+        const int taken = head->echo_serial != echo0; /* a new command taken in this step */
+        rcs_perf *p = &g_perf[i];
+        if (taken && g_init_verb[i] && head->verb == g_init_verb[i]) {
+            memset(p, 0, sizeof *p);
+            p->since = cycle;
+        }
+        p->last_ns = dt;
+        if (p->steps == 0 || dt < p->min_ns) p->min_ns = dt;
+        if (dt > p->max_ns) p->max_ns = dt;
+        p->sum_ns += dt;
+        p->steps++;
+        if (c->budget_ns > 0 && dt > c->budget_ns) {
+            s->overruns++;
+            p->overruns++;
+            /* Rate-limited: the 1st, 2nd, 4th, 8th, ... overrun of each controller. */
+            if (g_report_overruns && (s->overruns & (s->overruns - 1u)) == 0)
+                fprintf(stderr,
+                        "rcs: overrun: %s in cycle %" PRIu64 " took %.3f us, budget %.3f us (overrun %" PRIu64
+                        "; the next line at overrun %" PRIu64 ")\n",
+                        c->name, cycle, us(dt), us(c->budget_ns), s->overruns, s->overruns * 2u);
+        }
+        if (g_rules) {
+            const size_t nr = c->n_rules ? c->n_rules : 1u, nst = c->n_states ? c->n_states : 1u;
+            size_t from = taken ? 1u : (size_t)(state0 > 0 ? state0 : 0);
+            size_t r = fired > 0 ? (size_t)fired : 0u;
+            size_t v = head->verb > 0 ? (size_t)head->verb : 0u;
+            if (from >= nst) from = 0;
+            if (r >= nr) r = 0;
+            if (v > c->n_verbs) v = 0;
+            rule_stat *x = &g_rules[i][(v * nst + from) * nr + r];
+            x->steps++;
+            x->sum_ns += dt;
+            if (dt > x->max_ns) x->max_ns = dt;
+            if (g_step_log) {
+                fputs(c->name, g_step_log);
+                fputc('\t', g_step_log);
+                fputs(v ? c->verbs[v - 1u].name : "", g_step_log);
+                fputc('\t', g_step_log);
+                fputs(from < c->n_states ? c->state_names[from] : "", g_step_log);
+                fputc('\t', g_step_log);
+                fputs(r < c->n_rules ? c->rule_names[r] : "", g_step_log);
+                fputc('\n', g_step_log);
+            }
+        }
     }
 }
 
@@ -1560,6 +1787,7 @@ static int run_multi(const rcs_design *d, const options *opt, rcs_scenario *sc, 
         run_schedule(d, sc, st, k, tick);
         if (d->io_write) d->io_write();
         if (trace) rcs_trace_line_cpu(trace, d, k, t);
+        if (g_perf_out) perf_line(g_perf_out, d, k);
         pack_sample(d, at, mine);
         if (opt->lockstep && xp->wait_readers(link, k, stop_flag) != 0) {
             if (!g_stop) {
@@ -1727,6 +1955,15 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
     if (opt.init) send_init(d, opt.init, 0);
 
     step_stats *st = xcalloc(d->n_schedule, sizeof *st);
+    perf_start(d, &opt);
+    if (!perf_open(&opt, d)) {
+        if (trace && trace != stdout) fclose(trace);
+        restore_tty();
+        free(st);
+        perf_free(d);
+        rcs_scenario_free(sc);
+        return 2;
+    }
     const int64_t period = d->period_ns > 0 ? d->period_ns : 1;
     uint64_t cycle = 0, cycle_overruns = 0;
     int64_t max_work = 0;
@@ -1740,6 +1977,8 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
         status = run_multi(d, &opt, sc, trace, limit, st, &tot);
         if (status == 2) {
             if (trace && trace != stdout) fclose(trace);
+            perf_close(&opt, d, 0, 0);
+            perf_free(d);
             free(st);
             rcs_scenario_free(sc);
             return 2;
@@ -1775,6 +2014,7 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
         run_schedule(d, sc, st, cycle, cycle);
         if (d->io_write) d->io_write();
         if (trace) rcs_trace_line(trace, d, cycle);
+        if (g_perf_out) perf_line(g_perf_out, d, cycle);
         const int64_t t1 = now_ns();
         if (t1 - t0 > max_work) max_work = t1 - t0;
         if (op) op_publish(op, d, st, cycle, con.paused ? OP_PAUSED : OP_RUNNING, max_work, cycle_overruns);
@@ -1807,6 +2047,8 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
         op_publish(op, d, st, cycle, OP_FINISHED, max_work, cycle_overruns);
         op_close(op);
     }
+    if (!perf_close(&opt, d, cycle, 1)) status = 1;
+    perf_free(d);
     if (!opt.no_timing) timing_table(d, st, cycle, max_work, cycle_overruns, tot.missing);
     free(st);
     rcs_scenario_free(sc);

@@ -157,6 +157,22 @@ typedef struct {
     const char *events_hash;
 } rcs_design;
 
+/* A controller's performance since it last accepted an INIT (Appendix A's
+ * PR_PERFORMANCE), kept by the Main Program, one per controller in the
+ * schedule's order (docs/backends.md, "Performance"). The window restarts
+ * at the step in which the controller accepts a new command whose verb is
+ * named INIT (std.lifecycle); that step is the first of the new window. */
+typedef struct {
+    int64_t last_ns, min_ns, max_ns, sum_ns;
+    uint64_t steps;      /* steps timed in this window (mean = sum_ns / steps) */
+    uint64_t overruns;   /* steps longer than the controller's budget */
+    uint64_t since;      /* the cycle of the INIT step that began the window (0: the start) */
+} rcs_perf;
+
+/* The Main Program's table of rcs_perf, one per entry of d->schedule
+ * (NULL before rcs_main starts): what a console or a status publication reads. */
+const rcs_perf *rcs_perf_table(void);
+
 /* Runs the Main Program; returns the process exit status. */
 int rcs_main(int argc, char **argv, const rcs_design *d);
 

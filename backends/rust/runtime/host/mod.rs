@@ -19,6 +19,7 @@
 mod console;
 mod launch;
 mod multi;
+mod perf;
 mod scenario;
 pub mod shm;
 mod sys;
@@ -28,6 +29,7 @@ use std::io::{IsTerminal, Write};
 use std::time::{Duration as StdDuration, Instant};
 
 pub use launch::launch;
+pub use perf::{Perf, Stats};
 pub use scenario::Scenario;
 pub use trace::{fmt_f64, trace_line, trace_line_cpu};
 
@@ -194,6 +196,17 @@ pub trait HostDesign {
     fn io_read(&mut self) {}
     /// Deployment build: called after the schedule each cycle.
     fn io_write(&mut self) {}
+    /// The head of `ctrl`'s status: (echo_serial, verb, state, rule), for
+    /// the performance kept per controller and per (state, rule).
+    fn head(&self, _ctrl: usize) -> (u32, i32, i32, i32) {
+        (0, 0, 0, 0)
+    }
+    /// Sets the rule of `ctrl`'s status (marked -1 before a step to see whether a rule fires).
+    fn set_rule(&mut self, _ctrl: usize, _rule: i32) {}
+    /// `ctrl`'s state names and rule names, by number.
+    fn names(&self, _ctrl: usize) -> (&'static [&'static str], &'static [&'static str]) {
+        (&[], &[])
+    }
 }
 
 /// The built-in types, for design tables (`ty: &host::F64`).
@@ -262,6 +275,10 @@ struct Options {
     scenario: Option<String>,
     trace: Option<String>,
     run: Option<String>,
+    /// Performance outputs (`--trace-perf`, `--timing-out`, `--step-log`).
+    trace_perf: Option<String>,
+    timing_out: Option<String>,
+    step_log: Option<String>,
     /// `--domain`: the DDS domain id (a build with `--transport dds`).
     domain: Option<u8>,
 }
@@ -277,7 +294,10 @@ fn usage(prog: &str, d: &DesignDesc) -> String {
          file from `rcsc events DESIGN SCENARIO -o FILE`\n  \
          --trace FILE      write the JSON-lines trace to FILE (`-`: standard output)\n  \
          --realtime        lock memory and run under SCHED_FIFO (needs privileges)\n  \
-         --no-timing       do not print the timing table at exit\n  \
+         --no-timing       no timing table at exit and no overrun lines while running\n  \
+         --trace-perf FILE write each controller's performance per cycle to FILE (JSON lines)\n  \
+         --timing-out FILE write the worst step time per (state, rule) to FILE at exit (JSON)\n  \
+         --step-log FILE   write one line per step (controller, state, rule) to FILE\n  \
          --no-console      no keyboard console (p/space pause, s step, q quit)\n  \
          --init VERB       send VERB (no parameters) to the top controllers at start-up\n  \
          --paused          start paused (resume from the console)\n  \
@@ -327,7 +347,8 @@ fn parse_options(args: &[String]) -> Result<Options, String> {
             "--lockstep" if val.is_none() => o.lockstep = true,
             "--paused" if val.is_none() => o.paused = true,
             "--help" | "-h" if val.is_none() => o.help = true,
-            "--cycles" | "--scenario" | "--trace" | "--run" | "--domain" | "--init" => {
+            "--cycles" | "--scenario" | "--trace" | "--run" | "--domain" | "--init" | "--trace-perf"
+            | "--timing-out" | "--step-log" => {
                 if val.is_none() {
                     match it.next() {
                         Some(v) => val = Some(v.clone()),
@@ -347,6 +368,9 @@ fn parse_options(args: &[String]) -> Result<Options, String> {
                     "--scenario" => o.scenario = Some(val),
                     "--run" => o.run = Some(val),
                     "--init" => o.init = Some(val),
+                    "--trace-perf" => o.trace_perf = Some(val),
+                    "--timing-out" => o.timing_out = Some(val),
+                    "--step-log" => o.step_log = Some(val),
                     "--domain" => match val
                         .parse::<u8>()
                         .ok()
@@ -395,7 +419,7 @@ fn us(ns: i64) -> f64 {
 }
 
 #[derive(Clone, Copy, Default)]
-struct StepStats {
+pub struct StepStats {
     last: i64,
     min: i64,
     max: i64,
@@ -526,13 +550,13 @@ fn strerror(e: &std::io::Error) -> String {
 fn run_schedule(
     design: &mut dyn HostDesign,
     sc: Option<&Scenario>,
-    st: &mut [StepStats],
+    st: &mut Stats,
     cycle: u64,
     tick: u64,
 ) {
     let d = design.desc();
-    for (s, &c) in st.iter_mut().zip(d.schedule) {
-        let (budget, divider) = d.ctrls.get(c).map_or((0, 1), |c| (c.budget_ns, c.divider));
+    for (i, &c) in d.schedule.iter().enumerate() {
+        let divider = d.ctrls.get(c).map_or(1, |c| c.divider);
         if divider > 1 && !(cycle - 1).is_multiple_of(divider) {
             continue;
         }
@@ -543,19 +567,11 @@ fn run_schedule(
         if console::held(c) {
             continue;
         }
+        let before = st.before(design, c);
         let s0 = Instant::now();
         design.step(c, cycle);
         let dt = since(s0, Instant::now());
-        s.last = dt;
-        if s.n == 0 || dt < s.min {
-            s.min = dt;
-        }
-        s.max = s.max.max(dt);
-        s.sum = s.sum.saturating_add(dt);
-        s.n = s.n.saturating_add(1);
-        if budget > 0 && dt > budget {
-            s.overruns = s.overruns.saturating_add(1);
-        }
+        st.after(design, i, c, cycle, dt, before);
     }
 }
 
@@ -723,7 +739,19 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
         let _ = send_init(design, verb, false);
     }
 
-    let mut st = vec![StepStats::default(); d.schedule.len()];
+    let mut st = match Stats::new(
+        &*design,
+        !opt.no_timing,
+        opt.timing_out.is_some(),
+        opt.trace_perf.as_deref(),
+        opt.step_log.as_deref(),
+    ) {
+        Ok(st) => st,
+        Err(message) => {
+            say!("{message}");
+            return 2;
+        }
+    };
     let period = d.period_ns.max(1);
     let (mut cycle, mut cycle_overruns, mut max_work) = (0u64, 0u64, 0i64);
     let mut line = String::new();
@@ -826,6 +854,7 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
                 }
             }
         }
+        st.perf_line(d, cycle);
         let t1 = since(base, Instant::now());
         let work = t1.saturating_sub(t0);
         max_work = max_work.max(work);
@@ -879,10 +908,19 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
             cycle_overruns,
         );
     }
+    if !st.finish(
+        &*design,
+        opt.trace_perf.as_deref(),
+        opt.step_log.as_deref(),
+        opt.timing_out.as_deref(),
+        cycle,
+    ) {
+        status = 1;
+    }
     if !opt.no_timing {
         say_raw(&timing_table(
             d,
-            &st,
+            &st.steps,
             cycle,
             max_work,
             cycle_overruns,

@@ -16,7 +16,7 @@
 
 use super::shm::{segment_name, Shm, ShmCpu, FAILED, FINISHED, STOPPED};
 use super::{run_schedule, sleep_until, sys, trace_line_cpu};
-use super::{HostDesign, MultiDesc, Options, Scenario, StepStats, Value};
+use super::{HostDesign, MultiDesc, Options, Scenario, Stats, Value};
 use std::io::Write;
 use std::time::{Duration, Instant};
 
@@ -215,7 +215,7 @@ pub fn run(
     sc: Option<&Scenario>,
     mut trace: Option<&mut Box<dyn Write>>,
     limit: u64,
-    st: &mut [StepStats],
+    st: &mut Stats,
 ) -> Result<(Totals, i32), i32> {
     let d = design.desc();
     let Some(mc) = d.multi else {
@@ -386,6 +386,7 @@ pub fn run(
                 tot.trace_failed = true;
             }
         }
+        st.perf_line(d, k);
         for (i, x) in mc.crossings.iter().enumerate() {
             if x.writer != me {
                 continue;
