@@ -114,6 +114,8 @@ def check_session(out: str) -> None:
     # The command and five single steps: the INIT cascade is done.
     assert (t[1]["SM"]["verb"], t[1]["SM"]["status"], t[1]["TB"]["status"]) == ("INIT", "DONE", "DONE")
     assert t[1]["_program"]["line"].startswith("cycle 5, paused") and t[1]["SM"]["steps"] == "5"
+    # The timing figures are the window since the controller took INIT (cycle 1).
+    assert (t[0]["SM"]["since"], t[1]["SM"]["since"]) == ("0", "1")
     # A computed argument reached SM; TB, paused, was not stepped (its buffers kept INIT/DONE).
     assert (t[2]["SM"]["verb"], t[2]["SM"]["status"]) == ("TRANSIT", "EXEC")
     assert (t[2]["TB"]["mode"], t[2]["TB"]["steps"], t[2]["TB"]["verb"]) == ("paused", "5", "INIT")

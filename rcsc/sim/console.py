@@ -235,7 +235,7 @@ def _us(ns: int) -> str:
 
 def format_table(seg: Segment, snap: Snapshot) -> str:
     """The status table: one line per controller, then the program's line."""
-    timing = [f for f in seg.fields if f.endswith("_ns") or f in ("overruns", "steps")]
+    timing = [f for f in seg.fields if f.endswith("_ns") or f in ("overruns", "steps", "since")]
     cols = ["controller", "mode", "verb", "state", "status", "rule", *[f.removesuffix("_ns") + ("_us" if f.endswith("_ns") else "") for f in timing]]
     lines = []
     for c, row in zip(seg.ctrls, snap.rows):

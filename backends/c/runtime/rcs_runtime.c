@@ -1215,11 +1215,11 @@ enum { OP_RUNNING = 0, OP_PAUSED = 1, OP_FINISHED = 2 };
  * the console reads the names from the segment). */
 enum {
     OF_VERB, OF_STATE, OF_STATUS, OF_RULE, OF_ECHO, OF_ERROR_CODE, OF_MODE, OF_PENDING_STEPS, OF_STEPS, OF_LAST_NS,
-    OF_MIN_NS, OF_MAX_NS, OF_MEAN_NS, OF_OVERRUNS, OF_BUDGET_NS, OP_N_FIELDS_
+    OF_MIN_NS, OF_MAX_NS, OF_MEAN_NS, OF_OVERRUNS, OF_BUDGET_NS, OF_SINCE, OP_N_FIELDS_
 };
 static const char *const op_fields[OP_N_FIELDS_] = {
     "verb", "state", "status", "rule", "echo", "error_code", "mode", "pending_steps", "steps", "last_ns",
-    "min_ns", "max_ns", "mean_ns", "overruns", "budget_ns",
+    "min_ns", "max_ns", "mean_ns", "overruns", "budget_ns", "since",
 };
 
 typedef struct {
@@ -1333,7 +1333,7 @@ static operator_seg *op_open(const rcs_design *d, const char *run) {
 }
 
 /* The status table and the program's words, under the seqlock. */
-static void op_publish(operator_seg *op, const rcs_design *d, const step_stats *st, uint64_t cycle, int run_state,
+static void op_publish(operator_seg *op, const rcs_design *d, uint64_t cycle, int run_state,
                        int64_t max_work, uint64_t overruns) {
     uint64_t seq = op_ld(&op->w[OP_SEQ]);
     __atomic_store_n(&op->w[OP_SEQ], seq + 1u, __ATOMIC_RELAXED);
@@ -1342,7 +1342,9 @@ static void op_publish(operator_seg *op, const rcs_design *d, const step_stats *
     for (size_t i = 0; i < d->n_ctrls; i++, row += OP_N_FIELDS_) {
         const rcs_ctrl *c = &d->ctrls[i];
         const rcs_status_head *s = c->status;
-        const step_stats *t = op->sched_at[i] == SIZE_MAX ? NULL : &st[op->sched_at[i]];
+        /* The performance window since the controller's last INIT
+         * (PR_PERFORMANCE), the same figures as --trace-perf. */
+        const rcs_perf *t = op->sched_at[i] == SIZE_MAX || g_perf == NULL ? NULL : &g_perf[op->sched_at[i]];
         uint64_t v[OP_N_FIELDS_];
         memset(v, 0, sizeof v);
         v[OF_VERB] = (uint64_t)(int64_t)s->verb;
@@ -1353,13 +1355,14 @@ static void op_publish(operator_seg *op, const rcs_design *d, const step_stats *
         v[OF_ERROR_CODE] = (uint64_t)(int64_t)s->error_code;
         v[OF_MODE] = g_ctrl_paused[i];
         v[OF_PENDING_STEPS] = g_ctrl_steps[i];
-        if (t != NULL && t->n > 0) {
-            v[OF_STEPS] = t->n;
-            v[OF_LAST_NS] = (uint64_t)t->last;
-            v[OF_MIN_NS] = (uint64_t)t->min;
-            v[OF_MAX_NS] = (uint64_t)t->max;
-            v[OF_MEAN_NS] = (uint64_t)(t->sum / (int64_t)t->n);
+        if (t != NULL && t->steps > 0) {
+            v[OF_STEPS] = t->steps;
+            v[OF_LAST_NS] = (uint64_t)t->last_ns;
+            v[OF_MIN_NS] = (uint64_t)t->min_ns;
+            v[OF_MAX_NS] = (uint64_t)t->max_ns;
+            v[OF_MEAN_NS] = (uint64_t)(t->sum_ns / (int64_t)t->steps);
             v[OF_OVERRUNS] = t->overruns;
+            v[OF_SINCE] = t->since;
         }
         v[OF_BUDGET_NS] = (uint64_t)c->budget_ns;
         for (size_t k = 0; k < OP_N_FIELDS_; k++) __atomic_store_n(&row[k], v[k], __ATOMIC_RELAXED);
@@ -1993,13 +1996,13 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
         if (op) op_serve(op, d, &con, cycle);
         if (con.on) console_poll(&con, 0, cycle);
         if ((con.on || op) && con.paused && !con.step) {
-            if (op) op_publish(op, d, st, cycle, OP_PAUSED, max_work, cycle_overruns);
+            if (op) op_publish(op, d, cycle, OP_PAUSED, max_work, cycle_overruns);
             while ((con.on || op) && con.paused && !con.step && !con.quit && !g_stop) {
                 if (con.on)
                     console_poll(&con, op ? 10 : 100, cycle);
                 else
                     sleep_until(now_ns() + 10000000);
-                if (op && op_serve(op, d, &con, cycle)) op_publish(op, d, st, cycle, OP_PAUSED, max_work, cycle_overruns);
+                if (op && op_serve(op, d, &con, cycle)) op_publish(op, d, cycle, OP_PAUSED, max_work, cycle_overruns);
             }
             /* A pause is not an overrun: the heartbeat starts again now. */
             deadline = now_ns();
@@ -2017,7 +2020,7 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
         if (g_perf_out) perf_line(g_perf_out, d, cycle);
         const int64_t t1 = now_ns();
         if (t1 - t0 > max_work) max_work = t1 - t0;
-        if (op) op_publish(op, d, st, cycle, con.paused ? OP_PAUSED : OP_RUNNING, max_work, cycle_overruns);
+        if (op) op_publish(op, d, cycle, con.paused ? OP_PAUSED : OP_RUNNING, max_work, cycle_overruns);
 
         if (opt.fast) {
             if (t1 - t0 > period) cycle_overruns++; /* no deadlines: the work alone against the period */
@@ -2044,7 +2047,7 @@ int rcs_main(int argc, char **argv, const rcs_design *d) {
     restore_tty();
     if (op) {
         op_serve(op, d, &con, cycle);
-        op_publish(op, d, st, cycle, OP_FINISHED, max_work, cycle_overruns);
+        op_publish(op, d, cycle, OP_FINISHED, max_work, cycle_overruns);
         op_close(op);
     }
     if (!perf_close(&opt, d, cycle, 1)) status = 1;

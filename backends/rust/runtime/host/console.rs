@@ -11,7 +11,7 @@
 // text again when its length grows).
 
 use super::sys::{process_gone, Segment};
-use super::{ConsoleState as Control, HostDesign, Scenario, StepStats};
+use super::{ConsoleState as Control, HostDesign, Perf, Scenario};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::OnceLock;
 
@@ -38,7 +38,7 @@ pub const FINISHED: u64 = 2;
 
 /// The published fields of each controller: the one list (add at the end;
 /// the console reads the names from the segment).
-const FIELDS: [&str; 15] = [
+const FIELDS: [&str; 16] = [
     "verb",
     "state",
     "status",
@@ -54,6 +54,7 @@ const FIELDS: [&str; 15] = [
     "mean_ns",
     "overruns",
     "budget_ns",
+    "since",
 ];
 
 /// Per controller: paused (PR_MODE) and its pending single steps.
@@ -266,7 +267,7 @@ impl Operator {
     pub fn publish(
         &mut self,
         design: &dyn HostDesign,
-        st: &[StepStats],
+        perf: &[Perf],
         cycle: u64,
         run_state: u64,
         max_work: i64,
@@ -288,13 +289,19 @@ impl Operator {
                 v[6] = u64::from(paused.load(Ordering::Relaxed));
                 v[7] = steps.load(Ordering::Relaxed);
             }
-            if let Some(t) = self.sched_at[i].and_then(|k| st.get(k)).filter(|t| t.n > 0) {
-                v[8] = t.n;
-                v[9] = t.last as u64;
-                v[10] = t.min as u64;
-                v[11] = t.max as u64;
-                v[12] = (t.sum / i64::try_from(t.n).unwrap_or(i64::MAX).max(1)) as u64;
+            // The performance window since the controller's last INIT
+            // (PR_PERFORMANCE), the same figures as --trace-perf.
+            if let Some(t) = self.sched_at[i]
+                .and_then(|k| perf.get(k))
+                .filter(|t| t.steps > 0)
+            {
+                v[8] = t.steps;
+                v[9] = t.last_ns as u64;
+                v[10] = t.min_ns as u64;
+                v[11] = t.max_ns as u64;
+                v[12] = (t.sum_ns / i64::try_from(t.steps).unwrap_or(i64::MAX).max(1)) as u64;
                 v[13] = t.overruns;
+                v[15] = t.since;
             }
             v[14] = c.budget_ns as u64;
             rows.push(v);

@@ -347,8 +347,8 @@ fn parse_options(args: &[String]) -> Result<Options, String> {
             "--lockstep" if val.is_none() => o.lockstep = true,
             "--paused" if val.is_none() => o.paused = true,
             "--help" | "-h" if val.is_none() => o.help = true,
-            "--cycles" | "--scenario" | "--trace" | "--run" | "--domain" | "--init" | "--trace-perf"
-            | "--timing-out" | "--step-log" => {
+            "--cycles" | "--scenario" | "--trace" | "--run" | "--domain" | "--init"
+            | "--trace-perf" | "--timing-out" | "--step-log" => {
                 if val.is_none() {
                     match it.next() {
                         Some(v) => val = Some(v.clone()),
@@ -793,7 +793,7 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
             if let Some(o) = op.as_mut() {
                 o.publish(
                     &*design,
-                    &st,
+                    &st.perf,
                     cycle,
                     console::PAUSED,
                     max_work,
@@ -815,7 +815,7 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
                     if o.serve(design, &mut con, cycle) > 0 {
                         o.publish(
                             &*design,
-                            &st,
+                            &st.perf,
                             cycle,
                             console::PAUSED,
                             max_work,
@@ -864,7 +864,7 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
             } else {
                 console::RUNNING
             };
-            o.publish(&*design, &st, cycle, state, max_work, cycle_overruns);
+            o.publish(&*design, &st.perf, cycle, state, max_work, cycle_overruns);
         }
 
         if opt.fast {
@@ -901,7 +901,7 @@ pub fn run(design: &mut dyn HostDesign) -> i32 {
         o.serve(design, &mut con, cycle);
         o.publish(
             &*design,
-            &st,
+            &st.perf,
             cycle,
             console::FINISHED,
             max_work,
