@@ -65,6 +65,12 @@ class InState(Expr):
 
 
 @dataclass(slots=True)
+class Cycle(Expr):
+    """`cycle`: the number of the controller's current step, counted from 1
+    (an i64; with `period`, one step every `divider` cycles of its CPU)."""
+
+
+@dataclass(slots=True)
 class Age(Expr):
     """`age(V)` of a Global Memory variable V: the reader's release instant minus
     the instant the value it read became visible (a duration).
@@ -413,7 +419,7 @@ def walk_expr(e: Expr) -> list[Expr]:
     return out
 
 
-_LEAVES = frozenset((Const, Ref, InState, Age, SubView))
+_LEAVES = frozenset((Const, Ref, InState, Cycle, Age, SubView))
 
 
 def walk_stmts(stmts: list[Stmt]):

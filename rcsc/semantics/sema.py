@@ -18,10 +18,10 @@ from rcsc.semantics import model as m
 from rcsc.diagnostics import Diagnostics
 from rcsc.front.loader import LoadedFile
 from rcsc.front.source import Span
-from rcsc.semantics.typecheck import BUILTIN_FUNCS, CONVERSIONS, Checker, Globals, Scope
+from rcsc.semantics.typecheck import BUILTIN_FUNCS, CONVERSIONS, MATH_FUNCS, Checker, Globals, Scope
 from rcsc.semantics.types import BUILTIN_TYPES, DURATION, ERROR, I32, EnumType, ErrorType, RecordType, Type
 
-_RESERVED = set(BUILTIN_TYPES) | set(BUILTIN_FUNCS) | CONVERSIONS | {"cmd", "in_state", "seconds"}
+_RESERVED = set(BUILTIN_TYPES) | set(BUILTIN_FUNCS) | set(MATH_FUNCS) | CONVERSIONS | {"cmd", "in_state", "seconds", "cycle"}
 
 
 class _Sema:
