@@ -94,3 +94,36 @@ def test_doc_comments_reach_the_generated_code_sanitised(tmp_path) -> None:
     for line in c_text.splitlines():
         if "Done at once" in line or "a doc comment that tries" in line:
             assert line.count("*/") <= 1 and "\\" not in line and line.isascii()
+
+
+def test_doc_comments_in_hover_and_in_rcsc_doc() -> None:
+    from rcsc.driver import check_path
+    from rcsc.editor import symbols
+    from rcsc.outputs.doc import render_html
+
+    src = SourceFile("d.rcs", DOCS)
+    idx = symbols.build([text_to_ast(src, Diagnostics())])
+    assert symbols.hover_text(idx.controllers["A"]).endswith("\n\nThe top.\nSecond line.")
+    verb = idx.members["A"]["GO"]
+    assert symbols.hover_text(verb).endswith("A verb.")
+
+    from c_build import ROOT
+
+    result = check_path(str(ROOT / "tests/mathfn/mathfn.rcs"))
+    assert result.model is not None
+    html = render_html(result.model, list(result.diags))
+    assert '<p class="doc">Steps every third cycle of its CPU.' in html
+    assert "Done at once. */ // \\ ??/ newline follows" in html  # autoescaped text, nothing to escape here
+    assert "<span class=\"doc\">Done at once." in html
+
+
+def test_cycle_is_not_available_outside_controllers_and_builtins_are_reserved(tmp_path) -> None:
+    from rcsc.driver import check_path
+
+    def codes(text: str, name: str) -> list[str]:
+        (tmp_path / name).write_text(text)
+        return [d.code for d in check_path(str(tmp_path / name)).diags]
+
+    assert "E0100" in codes("design d\nfn f(x: i64) -> i64 = x + cycle\ncpu C { heartbeat 10 ms }\n", "f.rcs")
+    assert "E0101" in codes("design d\nfn sqrt(x: f64) -> f64 = x\ncpu C { heartbeat 10 ms }\n", "g.rcs")
+    assert "E0101" in codes("design d\nconst cycle: i32 = 1\ncpu C { heartbeat 10 ms }\n", "h.rcs")
