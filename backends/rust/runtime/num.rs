@@ -159,7 +159,11 @@ pub fn max_f64(a: f64, b: f64) -> f64 {
 /// |x| with the sign of y; a NaN y counts as positive.
 #[inline]
 pub fn copysign_f64(x: f64, y: f64) -> f64 {
-    let sign = if y.is_nan() { 0 } else { y.to_bits() & F64_SIGN };
+    let sign = if y.is_nan() {
+        0
+    } else {
+        y.to_bits() & F64_SIGN
+    };
     f64::from_bits((x.to_bits() & !F64_SIGN) | sign)
 }
 
@@ -215,7 +219,11 @@ pub fn round_even_f64(x: f64) -> f64 {
     } else if e < -1 {
         f64::from_bits(b & F64_SIGN)
     } else if e == -1 {
-        let one = if b & F64_MANT != 0 { 0x3ff0_0000_0000_0000 } else { 0 };
+        let one = if b & F64_MANT != 0 {
+            0x3ff0_0000_0000_0000
+        } else {
+            0
+        };
         f64::from_bits((b & F64_SIGN) | one)
     } else {
         let fb = (52 - e) as u32;
@@ -263,7 +271,11 @@ pub fn sqrt_f64(x: f64) -> f64 {
     let mut i: u32 = 54;
     while i > 0 {
         i -= 1;
-        let two = if 2 * i >= 54 { (m >> (2 * i - 54)) & 3 } else { 0 };
+        let two = if 2 * i >= 54 {
+            (m >> (2 * i - 54)) & 3
+        } else {
+            0
+        };
         rem = (rem << 2) | two;
         let t = (q << 2) | 1;
         q <<= 1;
