@@ -7,6 +7,8 @@ and every conversion between them, numeric edges (wrap-around, division by
 zero, MIN / -1, saturating float-to-int, NaN, infinities, -0.0), enums,
 nested records, constants, pure functions, std.math, `pre`/`post` blocks with
 `if`/`elif`/`else`, plans with `new`, `*`, `otherwise`, `in_state`, `done`,
+the math built-ins and `cycle` (from a stream of their own, around the
+values assigned),
 `error(c)`, `report`, subordinates commanded with arguments, status fields,
 simulators and `from env` inputs; the scenario sends commands with arguments
 to the root, sets the inputs to edge values and runs a number of cycles.
@@ -48,6 +50,12 @@ INT_EDGES = {
 }
 FLOAT_EDGES = ["0.0", "-0.0", "1.0", "-1.0", "0.5", "0.1", "2.5e3", "1e300", "-1e300", "5e-324", "2147483647.5",
                "-2147483648.9", "4294967295.5", "9.3e18", "-9.3e18", "1e-7", "3.0", "123.456"]
+# Operands of the math built-ins: signed zeros, halves (round_even), NaN,
+# infinities, subnormals, huge values, the largest halves below 2^52.
+MATH_EDGES = ["0.0", "(-0.0)", "0.5", "(-0.5)", "1.5", "2.5", "(-2.5)", "(-3.5)", "0.49999999999999994",
+              "4503599627370495.5", "(-4503599627370495.5)", "1e300", "(-1e300)", "5e-324", "1.7976931348623157e308",
+              "(0.0 / 0.0)", "(1.0 / 0.0)", "(-1.0 / 0.0)", "2.0", "(-2.0)", "1e16"]
+MATH_FUNCS = ("sqrt", "floor", "ceil", "trunc", "round_even", "copysign", "min", "max")
 DURATIONS = ["0 ms", "10 ms", "20 ms", "30 ms", "50 ms", "100 ms", "1 s", "500 us", "1.5 ms", "2 s"]
 
 # std.math functions by result type: (name, parameter types).
@@ -176,6 +184,9 @@ class DesignGen:
         self.ext_rng = random.Random(seed ^ 0x5EED)
         self.externs: list[tuple[str, list[tuple[str, str]], str]] = []
         self.in_fn = False  # a pure `fn` cannot call an extern (E0211)
+        # The math built-ins and `cycle` likewise: they wrap what the main
+        # stream drew for an assignment, so a seed keeps its design otherwise.
+        self.math_rng = random.Random(seed ^ 0xF10A7)
 
     # ---- types and values ------------------------------------------------------------
 
@@ -407,7 +418,33 @@ class DesignGen:
             ops += ["+=", "-=", "*="]
         elif t == "duration":
             ops += ["+=", "-="]
-        return f"{name} {r.choice(ops)} {self.expr(t, scope, 4)}"
+        return f"{name} {r.choice(ops)} {self.with_math(t, self.expr(t, scope, 4), scope)}"
+
+    def math_leaf(self, scope: list[Var]) -> str:
+        """An f64 operand for a math built-in, from the math stream: an f64
+        variable, `cycle`, or an edge (signed zeros, halves, NaN, infinities, huge)."""
+        mr = self.math_rng
+        vars_ = [v.name for v in scope if v.type == "f64"]
+        k = mr.random()
+        if vars_ and k < 0.4:
+            return mr.choice(vars_)
+        if k < 0.5:
+            return "f64(cycle)"
+        return mr.choice(MATH_EDGES)
+
+    def with_math(self, t: str, e: str, scope: list[Var], depth: int = 2) -> str:
+        """`e` (of type t), sometimes inside math built-ins or added to `cycle`."""
+        mr = self.math_rng
+        if t == "i64" and mr.random() < 0.15:
+            return f"({e} + cycle)"
+        if t != "f64" or depth <= 0 or mr.random() < 0.6:
+            return e
+        f = mr.choice(MATH_FUNCS)
+        inner = self.with_math(t, e, scope, depth - 1)
+        if f in ("copysign", "min", "max"):
+            other = self.math_leaf(scope)
+            return f"{f}({inner}, {other})" if mr.random() < 0.5 else f"{f}({other}, {inner})"
+        return f"{f}({inner})"
 
     def block(self, targets: list[Var], scope: list[Var], indent: str, n: int, depth: int = 2) -> list[str]:
         r = self.rng

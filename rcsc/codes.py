@@ -952,6 +952,28 @@ Fixed:
     ./submarine_MAIN --run r1 --paused &
     rcsc console submarine.rcs --run r1    # SM.INIT(), then resume
 """),
+    ("W0240", _W, "doc comment documents nothing", """
+A doc comment (`///` lines) documents the item written right after it: a
+controller, plan, rule, verb, verb set, Global Memory variable, status field,
+local, record field, function, extern, constant, enum, record or CPU. `rcsc doc`
+shows it and the generated C and Rust code repeat it in comments. A `///` run
+followed by something else (a `pre` block, a statement, the end of the file) or
+separated from the item by another comment documents nothing; write `//` for a
+plain comment.
+
+Wrong:
+
+    /// Reads the sensors.
+    pre { level = raw * 0.1; }
+
+Fixed:
+
+    // Reads the sensors.
+    pre { level = raw * 0.1; }
+
+    /// Fills the tank to the requested level.
+    verb FILL(level: f64)
+"""),
     ("E0605", _E, "design has no CPU", """
 A design needs at least one `cpu` with a heartbeat and a schedule to say where
 and how often its controllers run.

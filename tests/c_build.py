@@ -75,6 +75,8 @@ def _examples() -> list[tuple[Path, Path]]:
     pairs.append((ROOT / "tests/edge/edge.rcs", ROOT / "tests/edge/edge.scn"))
     # Nothing optional: no Global Memory, types, constants or functions.
     pairs.append((ROOT / "tests/bare/bare.rcs", ROOT / "tests/bare/bare.scn"))
+    # The math built-ins and `cycle` at their edges (signed zeros, NaN, infinities, halves).
+    pairs.append((ROOT / "tests/mathfn/mathfn.rcs", ROOT / "tests/mathfn/mathfn.scn"))
     # Names that the naming schemes must keep apart (tests/test_naming.py).
     pairs.append((ROOT / "tests/naming/rcs_runtime.rcs", ROOT / "tests/naming/scenarios.scn"))
     return pairs

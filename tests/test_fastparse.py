@@ -188,6 +188,14 @@ CORNERS = [
     "design d\nconst A: i32 = 1\u202e\n",
     "design d\r\nconst A: i32 = 1\rconst B: i32 = 2\n",
     "\ufeffdesign d\nconst A: i32 = 1\n",
+    # `///` doc comments: attached by one pass after either parser (W0240 for a stray one).
+    "design d\n/// A.\n///B\n//// plain\nconst A: i32 = 1\n/// dangling\n",
+    "design d\n/// c\ncontroller C level 1 budget 1 ms {\n /// v\n verb GO(x: f64)\n /// s\n status s: i32 = 0\n"
+    " /// p\n plan GO ordered {\n  /// r\n  R: true | new -> done;\n }\n /// nothing\n pre { }\n}\n"
+    "/// rec\nrecord R {\n /// f\n a: f64 }\n/// e\nenum E { A }\n/// cpu\ncpu M { heartbeat 10 ms }\n",
+    "design d\n/// cut off by /* c */\n/* x */ const A: i32 = 1\n/// */ /* \\ ??/\nfn f() -> i32 = 1\n",
+    "design d\n/// a doc comment before a syntax error\ncontroller {\n",
+    "design d\n/// \u202e reversed\nconst A: i32 = 1\n",
     "",
     "design d",
     "design",

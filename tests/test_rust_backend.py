@@ -29,8 +29,9 @@ STRESS = ROOT / "tests/stress/stress.rcs"
 EDGE = ROOT / "tests/edge/edge.rcs"
 BARE = ROOT / "tests/bare/bare.rcs"
 HOSTILE_NAMES = ROOT / "tests/naming/rcs_runtime.rcs"
+MATHFN = ROOT / "tests/mathfn/mathfn.rcs"  # the math built-ins, `cycle`, doc comments in comments
 PAIRS = CONFORMANCE
-CRATES = [SUBMARINE, CELL, STRESS, EDGE, BARE, HOSTILE_NAMES]
+CRATES = [SUBMARINE, CELL, STRESS, EDGE, BARE, HOSTILE_NAMES, MATHFN]
 
 
 

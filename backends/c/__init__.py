@@ -176,7 +176,7 @@ class CBackend(CTarget):
         plans = [self.plan(c, plan) for plan in c.plans.values()]
         self.verb = None
         ctx = {
-            "name": c_comment(c.name), "stem": n.ctrl_stem(c.name), "type": self.ctrl_type(c.name),
+            "name": c_comment(c.name), "doc": c_comment(c.doc), "stem": n.ctrl_stem(c.name), "type": self.ctrl_type(c.name),
             "init_fn": n.ctrl_part(c.name, "init"), "step_fn": n.ctrl_part(c.name, "step"),
             "ctrl_guard": n.ctrl_part(c.name, "H"), "budget_macro": n.ctrl_part(c.name, "BUDGET_NS"),
             "state_enum": n.ctrl_part(c.name, "state"), "rule_enum": n.ctrl_part(c.name, "rule"),
@@ -260,7 +260,8 @@ class CBackend(CTarget):
                      f"{own}.head.state = ST_ERROR;", "self->plan = 0;"]
         guard_text = "otherwise" if r.guard is None else self.comment(r.guard_span.text)
         head = f"if ({cond}) {{" if cond else "{"
-        return [f"/* {r.label} ({self.where_text(r.span)}): {guard_text} | {r.state} -> {self.comment(r.next.span.text)} */", head] + ["    " + x for x in body] + ["    return;", "}"]
+        doc = [f"/* {self.comment(r.doc)} */"] if r.doc else []
+        return doc + [f"/* {r.label} ({self.where_text(r.span)}): {guard_text} | {r.state} -> {self.comment(r.next.span.text)} */", head] + ["    " + x for x in body] + ["    return;", "}"]
 
 
 _HEAD_INIT = [

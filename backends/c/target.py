@@ -177,6 +177,10 @@ class CTarget(Target):
     def age_expr(self, e: m.Age) -> str:
         return self.age_of(f"buf->gm_stamp.{self.ident(e.name)}")
 
+    def cycle_expr(self, e: m.Cycle) -> str:
+        assert self.info is not None
+        return f"rcs_step_number(cycle, {max(1, self.info.c.divider)}u)"
+
     def instate_expr(self, e: m.InState) -> str:
         assert self.info is not None
         return f"rcs_cycles_ns(cycle, self->entry_cycle, {self.period_macro(self.info.c.cpu or '')})"

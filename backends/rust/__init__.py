@@ -335,7 +335,7 @@ class RustBackend(RustTarget):
         params = ["&mut self", "buf: &mut Buffers"] + (["ext: &impl Externs"] if step_ext else []) + ["cycle: u64"]
         self.verb = None
         ctx = {
-            "name": c.name, "type": me,
+            "name": c.name, "doc": self.comment(c.doc), "type": me,
             "kind": "simulator" if c.simulator else "controller", "level": c.level, "where": self.where_text(c.span),
             "budget_ns": c.budget_ns,
             "subs": subs, "locals": locals_,
@@ -440,10 +440,11 @@ class RustBackend(RustTarget):
         if not last:
             body.append(f"{pad(ind)}return;")
         guard_text = "otherwise" if r.guard is None else self.comment(r.guard_span.text)
-        comment = f"{pad(indent)}// {r.label} ({self.where_text(r.span)}): {guard_text} | {r.state} -> {nxt}"
+        comment = ([f"{pad(indent)}// {self.comment(r.doc)}"] if r.doc else []) + [
+            f"{pad(indent)}// {r.label} ({self.where_text(r.span)}): {guard_text} | {r.state} -> {nxt}"]
         if cond is None:
-            return [comment] + body
-        return [comment] + if_open(cond, indent) + body + [f"{pad(indent)}}}"]
+            return comment + body
+        return comment + if_open(cond, indent) + body + [f"{pad(indent)}}}"]
 
 
 def _rustfmt_use_order(lines: list[str]) -> list[str]:

@@ -230,6 +230,11 @@ class RustTarget(Target):
     def age_expr(self, e: m.Age) -> Node:
         return self.age_of(f"buf.gm_stamp.{self.ident(e.name)}")
 
+    def cycle_expr(self, e: m.Cycle) -> Node:
+        assert self.info is not None
+        self.uses.update(("num", "cycle"))
+        return Call("num::step_number", [Atom("cycle"), Atom(str(max(1, self.info.c.divider)))])
+
     def instate_expr(self, e: m.InState) -> Node:
         self.uses.update(("num", "cycle"))
         return Call("num::cycles_ns", [Atom("cycle"), Atom("self.entry_cycle"), Atom(self._period())])

@@ -304,6 +304,8 @@ def _ekey(e: m.Expr):
         return ("r", e.kind, e.name)
     if t is m.InState:
         return ("t",)
+    if t is m.Cycle:
+        return ("cycle",)
     if t is m.SubView:
         return ("s", e.sub, e.attr, e.value)
     if t is m.Age:
@@ -1100,7 +1102,7 @@ class _Canon:
         fixed = _is_fixed(key, self.c, self.assigned)
         if kind == "view":
             return ("view", tuple(self.design.controllers[key[1]].statuses))
-        if kind in ("error_code", "age", "in_state"):
+        if kind in ("error_code", "age", "in_state", "cycle"):
             return (kind,)
         var = None
         if kind == "gm":
@@ -1129,6 +1131,8 @@ class _Canon:
             return ("v", self.key_of((e.kind, e.name)), tuple())
         if t is m.InState:
             return ("v", self.key_of(("in_state",)))
+        if t is m.Cycle:
+            return ("v", self.key_of(("cycle",)))
         if t is m.SubView:
             if e.attr in ("done", "error", "executing", "status"):
                 return ("view", self.key_of(("view", e.sub)), e.attr, e.value)
@@ -1537,6 +1541,10 @@ def _name_type(design: Design, c: m.Controller, plan: m.Plan, key: tuple) -> tup
     kind = key[0]
     if kind == "in_state":
         return "in_state", DURATION
+    if kind == "cycle":
+        from rcsc.semantics.types import I64
+
+        return "cycle", I64
     if kind == "view":
         return key[1], None
     if kind == "error_code":
@@ -1588,6 +1596,8 @@ def witness_keys(design: Design, controller: str, plan_verb: str, witness: dict)
         parts = tuple(name.split("."))
         if name == "in_state":
             key = ("in_state",)
+        elif name == "cycle":
+            key = ("cycle",)
         elif name.startswith("age(") and name.endswith(")"):
             key = ("gm_age", name[4:-1])
         elif parts[0] == "cmd":
@@ -1680,6 +1690,8 @@ def apply_witness(sim, controller: str, plan: m.Plan, state: str, values: dict[t
         kind = key[0]
         if kind == "in_state":
             in_state = int(value)  # type: ignore[call-overload]
+        elif kind == "cycle":
+            rt.cycle_at = int(value)  # type: ignore[call-overload]
         elif kind == "age":
             ages[("sub", key[1])] = int(value)  # type: ignore[call-overload]
         elif kind == "gm_age":

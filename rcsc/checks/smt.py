@@ -19,6 +19,7 @@ declared range is taken as an assumption on the value):
 | `SUB.done` / `.error` / `.executing` / `.AT_GOAL` | one view variable per subordinate over {none, executing, done, error, <extra statuses>} |
 | `SUB.error_code`, `SUB.FIELD` | by type |
 | `SUB.age`, `in_state` | duration, >= 0 and a whole number of the controller's heartbeats |
+| `cycle` | i64, >= 1 (independent of `in_state` and the ages: an over-approximation) |
 
 The subordinate's view mirrors `rcsc.sim.simulate._StepEnv.sub_view`: `none` is
 "nothing sent yet", `executing` "sent, no final status for it yet"; `SUB.done`
@@ -84,6 +85,7 @@ VIEW_BASE = ("none", "executing", "done", "error")
 # Reasons a result is approximate (shown in findings).
 APPROX_ARITH = "f64 arithmetic is computed over the reals (no rounding, overflow or infinities)"
 APPROX_NONLINEAR = "a product or quotient of two f64 variables is treated as an unknown function"
+APPROX_SQRT = "`sqrt` is treated as an unknown non-negative function"
 APPROX_INFINITE = "an infinite f64 constant is treated as an unknown value"
 
 
@@ -313,7 +315,7 @@ class Encoder:
         if isinstance(t, IntType) or t == DURATION:
             it = t if isinstance(t, IntType) else I64_T
             v = z3.Int(vname)
-            lo, hi = it.min, it.max
+            lo, hi = (1, it.max) if key[0] == "cycle" else (it.min, it.max)  # steps count from 1
             if rng is not None and int(rng.lo) <= int(rng.hi):  # an empty range is E0206, not an assumption
                 lo, hi = max(lo, int(rng.lo)), min(hi, int(rng.hi))
             return Input(key, name, t, v, [v], z3.And(v >= lo, v <= hi))
@@ -401,6 +403,9 @@ class Encoder:
 
     def e_InState(self, e: m.InState, args):
         return self._input(("in_state",), "in_state", DURATION)
+
+    def e_Cycle(self, e: m.Cycle, args):
+        return self._input(("cycle",), "cycle", I64)
 
     def e_Age(self, e: m.Age, args):
         return self._input(("gm_age", e.name), f"age({e.name})", DURATION)
@@ -572,6 +577,37 @@ class Encoder:
                 cond = a.r <= b.r if name == "min" else a.r >= b.r
                 return F(_ite(cond, a.r, b.r), _or(a.nan, b.nan))
             return _ite(a <= b if name == "min" else a >= b, a, b)
+        if name in ("floor", "ceil", "trunc", "round_even"):
+            # Exact over the reals (an input is never infinite; the sign of a
+            # zero result is not modelled, and no comparison can see it).
+            x = vals[0]
+            r = x.r
+            if name == "floor":
+                k = z3.ToInt(r)
+            elif name == "ceil":
+                k = -z3.ToInt(-r)
+            elif name == "trunc":
+                k = z3.If(r >= 0, z3.ToInt(r), -z3.ToInt(-r))
+            else:
+                f = z3.ToInt(r)
+                d = r - z3.ToReal(f)
+                half = z3.RealVal("1/2")
+                k = z3.If(d < half, f, z3.If(d > half, f + 1, z3.If(f % 2 == 0, f, f + 1)))
+            return F(z3.ToReal(k), x.nan)
+        if name == "copysign":
+            x, y = vals
+            self._arith = True  # a -0.0 `y` is not modelled
+            mag = _ite(x.r < 0, -x.r, x.r)
+            return F(_ite(_or(y.nan, y.r >= 0), mag, -mag), x.nan)
+        if name == "sqrt":
+            # An unknown non-negative function of x (exact square roots are
+            # non-linear): what is proved impossible stays impossible.
+            x = vals[0]
+            self._approx.add(APPROX_SQRT)
+            root = self._uf("sqrt", [z3.RealSort()], z3.RealSort())(x.r)
+            self.side.append(root >= 0)
+            self.side.append(z3.Implies(x.r == 0, root == 0))
+            return F(root, _or(x.nan, x.r < 0))
         raise Unsupported(f"builtin {name}")
 
     def convert(self, v, source: Type, target: Type):

@@ -30,6 +30,7 @@ class Symbol:
     decl: Span  # the whole declaration
     detail: str  # one-line signature for hover
     children: list["Symbol"] = field(default_factory=list)
+    doc: str = ""  # its `///` doc comment
 
 
 def _squash(text: str) -> str:
@@ -105,7 +106,43 @@ def build(files: list[ast.File]) -> Index:
                 for set_name in item.verb_sets:
                     for v in verb_sets.get(set_name.name, []):
                         members.setdefault(v.name.name, Symbol(v.name.name, "verb", v.name.span, v.span, _signature(v)))
+    _attach_docs(files, idx)
     return idx
+
+
+def _attach_docs(files: list[ast.File], idx: Index) -> None:
+    """Give each symbol the doc comment of the declaration it stands for."""
+    from rcsc.front.doccomment import DOCUMENTED, _children
+
+    docs: dict[tuple[str, int], str] = {}
+
+    def collect(node) -> None:
+        if isinstance(node, DOCUMENTED) and node.doc is not None:
+            docs[(node.span.file.path, node.span.start)] = node.doc.text
+        for child in _children(node):
+            collect(child)
+
+    for tree in files:
+        for item in tree.items:
+            collect(item)
+    if not docs:
+        return
+    seen: set[int] = set()
+
+    def give(sym: Symbol) -> None:
+        if id(sym) in seen:
+            return
+        seen.add(id(sym))
+        sym.doc = docs.get((sym.decl.file.path, sym.decl.start), "")
+        for child in sym.children:
+            give(child)
+
+    for syms in idx.top.values():
+        for sym in syms:
+            give(sym)
+    for members in idx.members.values():
+        for sym in members.values():
+            give(sym)
 
 
 def _controller(c: ast.Controller, idx: Index) -> Symbol:
@@ -211,4 +248,5 @@ def lookup(idx: Index, source: SourceFile, offset: int) -> Symbol | None:
 
 
 def hover_text(sym: Symbol) -> str:
-    return f"```rcs\n{sym.detail}\n```\n({sym.kind})"
+    text = f"```rcs\n{sym.detail}\n```\n({sym.kind})"
+    return text + "\n\n" + sym.doc if sym.doc else text

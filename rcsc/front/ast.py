@@ -25,6 +25,13 @@ class Node(_Slots):
 
 
 @dataclass(slots=True)
+class DocComment(Node):
+    """The `///` lines before an item (rcsc.front.doccomment), without the slashes."""
+
+    text: str
+
+
+@dataclass(slots=True)
 class Ident(Node):
     """A name together with the span of just that name."""
 
@@ -156,6 +163,7 @@ class TypeRef(Node):
 class Param(Node):
     name: Ident
     type: TypeRef
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)
@@ -169,18 +177,21 @@ class Const(Node):
     name: Ident
     type: TypeRef
     value: Expr
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)
 class Enum(Node):
     name: Ident
     members: list[Ident]
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)
 class Record(Node):
     name: Ident
     fields: list[Param]
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)
@@ -190,6 +201,7 @@ class GmVar(Node):
     init: Expr | None
     from_env: bool
     to_env: bool = False  # `to env`: an output the environment reads (an actuator)
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)
@@ -198,6 +210,7 @@ class Function(Node):
     params: list[Param]
     ret: TypeRef
     body: Expr
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)
@@ -206,18 +219,21 @@ class Extern(Node):
     params: list[Param]
     ret: TypeRef
     budget: DurationLit
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)
 class Verb(Node):
     name: Ident
     params: list[Param]
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)
 class VerbSet(Node):
     name: Ident
     verbs: list[Verb]
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)
@@ -241,6 +257,7 @@ class Rule(Node):
     state: StatePat
     next: NextState
     jobs: list[Stmt]
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)
@@ -249,6 +266,7 @@ class Plan(Node):
     continuous: bool
     rules: list[Rule]
     modifiers: list[Ident] = field(default_factory=list)
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)
@@ -258,6 +276,7 @@ class Decl(Node):
     name: Ident
     type: TypeRef
     init: Expr
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)
@@ -283,6 +302,7 @@ class Controller(Node):
     pre: list[tuple[Span, list[Stmt]]] = field(default_factory=list)
     post: list[tuple[Span, list[Stmt]]] = field(default_factory=list)
     plans: list[Plan] = field(default_factory=list)
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)
@@ -291,6 +311,7 @@ class Cpu(Node):
     heartbeat: list[DurationLit] = field(default_factory=list)
     overhead: list[DurationLit] = field(default_factory=list)
     schedule: list[NameList] = field(default_factory=list)
+    doc: DocComment | None = None
 
 
 @dataclass(slots=True)

@@ -593,7 +593,11 @@ def text_to_ast(source: SourceFile, diags: Diagnostics) -> ast.File | None:
 
 def text_to_ast_lark(source: SourceFile, diags: Diagnostics) -> ast.File | None:
     """Parse one file with the reference (Lark) parser."""
-    return parse_with(_parser(), _ToAst, source, diags)
+    from rcsc.front.doccomment import attach
+
+    tree = parse_with(_parser(), _ToAst, source, diags)
+    attach(tree, source, diags)
+    return tree
 
 
 def check_bidi(source: SourceFile, diags: Diagnostics) -> None:

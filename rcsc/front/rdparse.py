@@ -812,4 +812,9 @@ def parse_fast(source: SourceFile) -> tuple[ast.File | None, Diagnostics]:
         tree = parser.file()
     except (RecursionError, IndexError) as exc:
         raise Fallback from exc
-    return (None if parser.too_deep else tree), diags
+    if parser.too_deep:
+        return None, diags
+    from rcsc.front.doccomment import attach
+
+    attach(tree, source, diags)
+    return tree, diags

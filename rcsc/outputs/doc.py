@@ -77,6 +77,7 @@ class RuleRow:
     next_kind: str  # named | same | done | error | new
     jobs: list[str]
     findings: list[FindingView]
+    doc: str = ""  # the rule's `///` comment
 
 
 @dataclass
@@ -88,6 +89,7 @@ class PlanView:
     rows: list[RuleRow]
     picture: Picture
     findings: list[FindingView]  # about the plan, not one rule
+    doc: str = ""
 
     @property
     def flagged(self) -> int:
@@ -107,6 +109,7 @@ class Fact:
 class VerbView:
     signature: str
     plan_anchor: str | None
+    doc: str = ""
 
 
 @dataclass
@@ -123,6 +126,9 @@ class ControllerView:
     post: list[str]
     plans: list[PlanView]
     findings: list[FindingView]
+    doc: str = ""
+    status_field_docs: list[str] = field(default_factory=list)  # one per status field ("" for none)
+    local_docs: list[str] = field(default_factory=list)
 
 
 @dataclass
@@ -133,6 +139,7 @@ class GmRow:
     init: str
     writers: list[tuple[str, str]]  # (name, anchor)
     readers: list[tuple[str, str]]
+    doc: str = ""
 
 
 @dataclass
@@ -311,6 +318,7 @@ def _rule_row(rule: m.Rule, findings: list[FindingView]) -> RuleRow:
         next_kind=rule.next.kind,
         jobs=graph.rule_jobs(rule),
         findings=findings,
+        doc=rule.doc,
     )
 
 
@@ -322,7 +330,7 @@ def _plan_view(c: m.Controller, plan: m.Plan, placed: dict, pictures: Pictures, 
     picture = pictures.add(anchor, graph.plan_graph(c, plan, diags, compact=True))
     findings = placed.get(("plan", c.name, plan.verb), [])
     modifiers = [word for word, on in (("continuous", plan.continuous), ("ordered", getattr(plan, "ordered", False))) if on]
-    return PlanView(anchor, c.name, plan.verb, modifiers, rows, picture, findings)
+    return PlanView(anchor, c.name, plan.verb, modifiers, rows, picture, findings, plan.doc)
 
 
 def _links(names: list[str], anchor: Callable[[str], str]) -> list[tuple[str, str]]:
@@ -360,7 +368,7 @@ def _controller_view(design: m.Design, c: m.Controller, cpu: str | None, placed:
         name=c.name,
         simulator=c.simulator,
         facts=_controller_facts(design, c, cpu),
-        verbs=[VerbView(verb_signature(v), plan_anchor(c.name, v.name) if v.name in c.plans else None) for v in c.verbs.values()],
+        verbs=[VerbView(verb_signature(v), plan_anchor(c.name, v.name) if v.name in c.plans else None, v.doc) for v in c.verbs.values()],
         statuses=[f"{name} = {number}" for name, number in c.statuses.items()],
         status_fields=[format_var(v) for v in c.status_fields.values()],
         locals=[format_var(v) for v in c.locals.values()],
@@ -368,6 +376,9 @@ def _controller_view(design: m.Design, c: m.Controller, cpu: str | None, placed:
         post=[statement_text(s) for s in c.post],
         plans=[_plan_view(c, plan, placed, pictures, diags) for plan in c.plans.values()],
         findings=placed.get(("ctl", c.name), []),
+        doc=c.doc,
+        status_field_docs=[v.doc for v in c.status_fields.values()],
+        local_docs=[v.doc for v in c.locals.values()],
     )
 
 
@@ -382,7 +393,7 @@ def _gm_rows(design: m.Design) -> list[GmRow]:
         reader_links = _links(readers, controller_anchor)
         if var.to_env:
             reader_links = reader_links + [("environment", "")]
-        rows.append(GmRow(gm_anchor(var.name), var.name, str(var.type), format_value(var.init, var.type), links, reader_links))
+        rows.append(GmRow(gm_anchor(var.name), var.name, str(var.type), format_value(var.init, var.type), links, reader_links, var.doc))
     return rows
 
 

@@ -35,6 +35,9 @@ class Env:
     def sub_view(self, e: m.SubView):
         raise NotConstant(e)
 
+    def cycle(self, e: m.Cycle):
+        raise NotConstant(e)
+
     def age(self, e: m.Age):
         raise NotConstant(e)
 
@@ -125,6 +128,10 @@ def _c_in_state(e):
     return lambda env, a: env.in_state(e)
 
 
+def _c_cycle(e):
+    return lambda env, a: env.cycle(e)
+
+
 def _c_sub_view(e):
     return lambda env, a: env.sub_view(e)
 
@@ -213,12 +220,23 @@ _COMPILERS = {
     m.Ref: _c_ref,
     m.InState: _c_in_state,
     m.SubView: _c_sub_view,
+    m.Cycle: _c_cycle,
     m.Age: _c_age,
     m.Field: _c_field,
     m.Unary: _c_unary,
     m.Binary: _c_binary,
     m.IfExpr: _c_if,
     m.Call: _c_call,
+}
+
+
+_MATH = {
+    "sqrt": numeric.f64_sqrt,
+    "floor": numeric.f64_floor,
+    "ceil": numeric.f64_ceil,
+    "trunc": numeric.f64_trunc,
+    "round_even": numeric.f64_round_even,
+    "copysign": numeric.f64_copysign,
 }
 
 
@@ -236,16 +254,14 @@ def _call(e: m.Call, args: list, env: Env):
             return math.fabs(v)
         if e.func == "seconds":
             return args[0] / 1e9
-        if e.func == "min":
+        if e.func in ("min", "max"):
             a, b = args
-            if e.type == F64 and (math.isnan(a) or math.isnan(b)):
-                return math.nan
-            return a if a <= b else b
-        if e.func == "max":
-            a, b = args
-            if e.type == F64 and (math.isnan(a) or math.isnan(b)):
-                return math.nan
-            return a if a >= b else b
+            if e.type == F64:
+                return (numeric.f64_min if e.func == "min" else numeric.f64_max)(a, b)
+            return (a if a <= b else b) if e.func == "min" else (a if a >= b else b)
+        math_fn = _MATH.get(e.func)
+        if math_fn is not None:
+            return math_fn(*args)
         raise ValueError(e.func)
     if e.kind == "extern":
         return env.call_extern(e, args)

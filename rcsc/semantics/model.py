@@ -65,6 +65,12 @@ class InState(Expr):
 
 
 @dataclass(slots=True)
+class Cycle(Expr):
+    """`cycle`: the number of the controller's current step, counted from 1
+    (an i64; with `period`, one step every `divider` cycles of its CPU)."""
+
+
+@dataclass(slots=True)
 class Age(Expr):
     """`age(V)` of a Global Memory variable V: the reader's release instant minus
     the instant the value it read became visible (a duration).
@@ -191,6 +197,7 @@ class Var:
     range: Range | None = None
     from_env: bool = False  # GM only
     to_env: bool = False  # GM only: the environment reads it (an actuator output)
+    doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
 
 
 @dataclass
@@ -199,6 +206,7 @@ class ConstDef:
     type: Type
     value: Value
     span: Span
+    doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
 
 
 @dataclass
@@ -211,6 +219,7 @@ class Function:
     extern: bool = False
     budget_ns: int = 0
     module: str = ""  # the design or module that declares it
+    doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
 
 
 @dataclass
@@ -220,6 +229,7 @@ class Verb:
     span: Span
     # Where the controller declares it: the verb itself, or its `verbs SET` line.
     use_span: Span | None = None
+    doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
 
     def param(self, name: str) -> Var | None:
         return next((p for p in self.params if p.name == name), None)
@@ -251,6 +261,7 @@ class Rule:
     guard_span: Span
     next: StateRef
     jobs: list[Stmt]
+    doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
 
     @property
     def otherwise(self) -> bool:
@@ -271,6 +282,7 @@ class Plan:
     # `plan X ordered`: the table is prioritized on purpose (first match wins
     # by design), so the guard analysis does not report overlapping rules.
     ordered: bool = False
+    doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
 
     @property
     def states(self) -> list[str]:
@@ -319,6 +331,7 @@ class Controller:
     period_span: Span | None = None
     divider: int = 1  # filled in by the timing check
     period_ns: int = 0  # filled in by the timing check
+    doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
 
 
 @dataclass
@@ -345,6 +358,7 @@ class Cpu:
     overhead_ns: int
     schedule: list[NameUse]
     heartbeat_span: Span | None = None
+    doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
 
 
 @dataclass
@@ -413,7 +427,7 @@ def walk_expr(e: Expr) -> list[Expr]:
     return out
 
 
-_LEAVES = frozenset((Const, Ref, InState, Age, SubView))
+_LEAVES = frozenset((Const, Ref, InState, Cycle, Age, SubView))
 
 
 def walk_stmts(stmts: list[Stmt]):

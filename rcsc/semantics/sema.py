@@ -18,10 +18,16 @@ from rcsc.semantics import model as m
 from rcsc.diagnostics import Diagnostics
 from rcsc.front.loader import LoadedFile
 from rcsc.front.source import Span
-from rcsc.semantics.typecheck import BUILTIN_FUNCS, CONVERSIONS, Checker, Globals, Scope
+from rcsc.semantics.typecheck import BUILTIN_FUNCS, CONVERSIONS, MATH_FUNCS, Checker, Globals, Scope
 from rcsc.semantics.types import BUILTIN_TYPES, DURATION, ERROR, I32, EnumType, ErrorType, RecordType, Type
 
-_RESERVED = set(BUILTIN_TYPES) | set(BUILTIN_FUNCS) | CONVERSIONS | {"cmd", "in_state", "seconds"}
+_RESERVED = set(BUILTIN_TYPES) | set(BUILTIN_FUNCS) | set(MATH_FUNCS) | CONVERSIONS | {"cmd", "in_state", "seconds", "cycle"}
+
+
+def _doc(node) -> str:
+    """The text of the doc comment of an AST node, or ""."""
+    doc = getattr(node, "doc", None)
+    return doc.text if doc is not None else ""
 
 
 class _Sema:
@@ -164,7 +170,7 @@ class _Sema:
             self.g.consts[item.name.name] = m.ConstDef(item.name.name, ERROR, 0, item.span)
             return
         self.check_in_range(value.value, self.range_of(item.type, t, checker), item.value.span, t)
-        self.g.consts[item.name.name] = m.ConstDef(item.name.name, t, value.value, item.span)
+        self.g.consts[item.name.name] = m.ConstDef(item.name.name, t, value.value, item.span, doc=_doc(item))
 
     def globals_(self) -> None:
         # Function signatures first: constants may call pure functions.  A
@@ -176,7 +182,7 @@ class _Sema:
         for name, item in self.decls.items():
             if isinstance(item, (ast.Function, ast.Extern)):
                 params = self.params(item.params, const_checker)
-                fn = m.Function(name, params, self.type_ref(item.ret), item.span, extern=isinstance(item, ast.Extern))
+                fn = m.Function(name, params, self.type_ref(item.ret), item.span, extern=isinstance(item, ast.Extern), doc=_doc(item))
                 if isinstance(item, ast.Extern):
                     fn.budget_ns = item.budget.nanos
                 fn.module = item.span.file.path
@@ -205,7 +211,7 @@ class _Sema:
                         self.d.add("E0101", v.name.span, f"verb `{v.name.name}` is declared more than once in verb set `{name}`", "repeated verb")
             elif isinstance(item, ast.GmVar):
                 t = self.type_ref(item.type)
-                var = m.Var(name, t, item.span, from_env=item.from_env, to_env=item.to_env)
+                var = m.Var(name, t, item.span, from_env=item.from_env, to_env=item.to_env, doc=_doc(item))
                 var.range = self.range_of(item.type, t, const_checker)
                 if item.init is None:
                     self.d.add("E0402", item.name.span, f"Global Memory variable `{name}` has no initial value", "no initial value").with_help(
@@ -228,7 +234,7 @@ class _Sema:
                 out.append(m.Var(p.name.name, ERROR, p.span))
                 continue
             t = self.type_ref(p.type)
-            out.append(m.Var(p.name.name, t, p.span, range=self.range_of(p.type, t, checker)))
+            out.append(m.Var(p.name.name, t, p.span, range=self.range_of(p.type, t, checker), doc=_doc(p)))
         return out
 
     # ---- pass 4: controller interfaces ------------------------------------------
@@ -242,7 +248,7 @@ class _Sema:
         name = item.name.name
         level, level_span = self._single(item.level, item, "level", lambda v: v[0], lambda v: v[1])
         budget, budget_span = self._single(item.budget, item, "budget", lambda v: v.nanos, lambda v: v.span)
-        c = m.Controller(name, item.span, item.name.span, item.simulator, level or 0, budget or 0)
+        c = m.Controller(name, item.span, item.name.span, item.simulator, level or 0, budget or 0, doc=_doc(item))
         c.level_span, c.budget_span = level_span, budget_span
         # `period` is optional (default: every cycle of its CPU); the timing
         # check relates it to the CPU's heartbeat once the controller is placed.
@@ -279,7 +285,7 @@ class _Sema:
             if v.name.name in c.verbs:
                 self.d.add("E0101", use or v.name.span, f"verb `{v.name.name}` is declared more than once in `{name}`", "repeated verb")
                 continue
-            verb = m.Verb(v.name.name, self.params(v.params, checker), v.span)
+            verb = m.Verb(v.name.name, self.params(v.params, checker), v.span, doc=_doc(v))
             verb.use_span = use or v.name.span
             c.verbs[v.name.name] = verb
         number = m.FIRST_EXTRA_STATUS
@@ -302,7 +308,7 @@ class _Sema:
                 self.d.add("E0101", decl.name.span, f"`{n}` is defined more than once in `{name}`", f"repeated {what}")
                 continue
             t = self.type_ref(decl.type)
-            var = m.Var(n, t, decl.span, range=self.range_of(decl.type, t, checker))
+            var = m.Var(n, t, decl.span, range=self.range_of(decl.type, t, checker), doc=_doc(decl))
             if not isinstance(t, ErrorType):
                 value = checker.constant(decl.init, t, "an initial value")
                 if value is not None:
@@ -313,9 +319,16 @@ class _Sema:
 
     def _single(self, values, item: ast.Controller, what: str, get, span_of):
         if not values:
-            self.d.add("E0209", item.name.span, f"controller `{item.name.name}` has no `{what}`", f"no `{what}`").with_help(
-                f"write it in the header: `controller {item.name.name} level 2 budget 1 ms {{`"
+            diag = self.d.add("E0209", item.name.span, f"controller `{item.name.name}` has no `{what}`", f"no `{what}`").with_help(
+                f"write it in the header: `controller {item.name.name} level {1 if not item.subordinates else 2} budget 1 ms {{`"
             )
+            if what == "level":
+                diag.with_note("there is no default: the hierarchy check compares levels (a controller without subordinates is "
+                               "level 1, a supervisor is above its highest subordinate), and a guessed level would hide a wrong hierarchy")
+            else:
+                diag.with_note("there is no default: the timing check adds the budgets of each CPU cycle to prove that the schedule "
+                               "fits the heartbeat, and a guessed budget would make that proof meaningless; start with an upper "
+                               "bound and refine it with `rcsc budget`")
             return None, None
         for extra in values[1:]:
             self.d.add("E0209", span_of(extra), f"`{what}` is given more than once", f"repeated `{what}`")
@@ -433,9 +446,9 @@ class _Sema:
                 code = const_checker.constant(r.next.code, I32, "an error code")
                 nxt.code = int(code.value) if code is not None and isinstance(code.value, int) else 0
             jobs = checker.stmts(r.jobs)
-            rules.append(m.Rule(i, r.label.name, r.span, r.label.span, state, guard, r.guard_span, nxt, jobs))
+            rules.append(m.Rule(i, r.label.name, r.span, r.label.span, state, guard, r.guard_span, nxt, jobs, doc=_doc(r)))
         ordered = any(mod.name == "ordered" for mod in plan.modifiers)
-        return m.Plan(verb.name, plan.span, plan.name.span, plan.continuous, rules, ordered)
+        return m.Plan(verb.name, plan.span, plan.name.span, plan.continuous, rules, ordered, doc=_doc(plan))
 
     # ---- pass 6: CPUs -----------------------------------------------------------
 
@@ -474,7 +487,7 @@ class _Sema:
                 if use.name not in self.g.controllers:
                     self.d.add("E0104", use.span, f"no controller named `{use.name}`", "unknown controller")
             schedule = [u for u in schedule if u.name in self.g.controllers]
-            cpu = m.Cpu(name, item.span, item.name.span, hb.nanos if hb else 0, item.overhead[0].nanos if item.overhead else 0, schedule)
+            cpu = m.Cpu(name, item.span, item.name.span, hb.nanos if hb else 0, item.overhead[0].nanos if item.overhead else 0, schedule, doc=_doc(item))
             cpu.heartbeat_span = hb.span if hb else None
             out[name] = cpu
         return out

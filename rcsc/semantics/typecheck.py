@@ -34,6 +34,9 @@ from rcsc.semantics.types import (
 )
 
 BUILTIN_FUNCS = {"abs": 1, "min": 2, "max": 2}
+# The f64 math built-ins (docs/language.md, "Math built-ins"): correctly
+# rounded, the same bits in the simulator, C and Rust (rcsc.semantics.numeric).
+MATH_FUNCS = {"sqrt": 1, "floor": 1, "ceil": 1, "trunc": 1, "round_even": 1, "copysign": 2}
 CONVERSIONS = {"i32", "i64", "u32", "f64"}
 ARITH_OPS = ("+", "-", "*", "/", "%")
 
@@ -257,6 +260,8 @@ class Checker:
                 return m.Const(node.span, ERROR, 0)
             if n == "in_state" and s.in_plan:
                 return m.InState(node.span, DURATION)
+            if n == "cycle":
+                return m.Cycle(node.span, I64)
         if n in self.g.consts or (callable(self.g.resolve_const) and self.g.resolve_const(n)):
             cd = self.g.consts.get(n)
             if cd is None:
@@ -281,6 +286,8 @@ class Checker:
             diag.with_help("read a command parameter with `cmd.NAME`")
         elif n == "in_state":
             diag.with_note("`in_state` is only available in the rules of a plan")
+        elif n == "cycle":
+            diag.with_note("`cycle` (the controller's step number) is only available in a controller's pre, post and plans")
         elif n in self.g.gm and s.fn_params is not None:
             diag.with_note("functions are pure: pass Global Memory values as arguments")
         return m.Const(node.span, ERROR, 0)
@@ -525,6 +532,12 @@ class Checker:
             return self.fold(m.Call(node.span, F64, "builtin", name, args))
         if name == "age" and name not in self.g.functions and not self._is_variable(name):
             return self._age(node)
+        if name in MATH_FUNCS and name not in self.g.functions and not self._is_variable(name):
+            params = [("x", F64)] if MATH_FUNCS[name] == 1 else [("x", F64), ("y", F64)]
+            args = self.match_args(params, node.args, node, f"`{name}`")
+            if args is None or any(isinstance(a.type, ErrorType) for a in args):
+                return m.Const(node.span, ERROR, 0)
+            return self.fold(m.Call(node.span, F64, "builtin", name, args))
         if name in BUILTIN_FUNCS and name not in self.g.functions:
             count = BUILTIN_FUNCS[name]
             params = [("x", None)] if count == 1 else [("a", None), ("b", None)]

@@ -108,6 +108,7 @@ class ControllerRuntime:
         self.idle = True
         self.entry_ns = 0  # release instant of the step that entered the current state
         self.steps = 0
+        self.cycle_at: int | None = None  # `cycle` fixed by a witness replay (rcsc.checks.guards)
         self.gm_uses = c.reads + c.writes
 
 
@@ -132,6 +133,12 @@ class _StepEnv(Env):
 
     def in_state(self, e: m.InState):
         return self.sim.now - self.rt.entry_ns
+
+    def cycle(self, e: m.Cycle):
+        rt = self.rt
+        if rt.cycle_at is not None:
+            return rt.cycle_at
+        return (self.sim.cycle - 1) // rt.c.divider + 1
 
     def sub_view(self, e: m.SubView):
         rt = self.rt

@@ -104,13 +104,92 @@ static inline bool rcs_isnan(double x) { return x != x; }
 /* fabs without libm (a gcc/clang builtin, one instruction): -0.0 gives 0.0
  * and NaN stays NaN, as Python's math.fabs. */
 static inline double rcs_fabs(double x) { return __builtin_fabs(x); }
+/* `cycle` in a design: the number of the controller's step, from 1, when it
+ * steps every `divider`-th cycle of its CPU (cycles 1, 1 + divider, ...). */
+static inline int64_t rcs_step_number(uint64_t cycle, uint64_t divider) { return (int64_t)((cycle - 1u) / divider + 1u); }
+
+/* ---- the math built-ins: bit for bit as rcsc/semantics/numeric.py ----
+ * Integer algorithms on the IEEE-754 encoding: no libm (so no -lm and no
+ * errno), no dependence on the rounding mode (fesetround) or on compiler
+ * flags.  A zero result keeps the sign of x (ceil(-0.5) == -0.0); NaN and
+ * infinities come back unchanged (sqrt: NaN for x < 0).  min/max: NaN if
+ * either is NaN, min(-0.0, 0.0) == -0.0 and max(-0.0, 0.0) == 0.0 in either
+ * order (C's fmin/fmax leave both open).  copysign: a NaN y counts as
+ * positive.  The f64 <-> bits casts go through a union (defined in C99). */
+#define RCS_F64_SIGN (UINT64_C(1) << 63)
+#define RCS_F64_MANT ((UINT64_C(1) << 52) - 1u)
+static inline uint64_t rcs_f64_bits(double x) { union { double d; uint64_t u; } v; v.d = x; return v.u; }
+static inline double rcs_f64_of_bits(uint64_t b) { union { double d; uint64_t u; } v; v.u = b; return v.d; }
+static inline double rcs_nan_f64(void) { return rcs_f64_of_bits(UINT64_C(0x7ff8000000000000)); }
 static inline double rcs_min_f64(double a, double b) {
-    if (rcs_isnan(a) || rcs_isnan(b)) return a + b; /* NaN */
-    return a <= b ? a : b;
+    if (rcs_isnan(a) || rcs_isnan(b)) return rcs_nan_f64();
+    if (a == b) return rcs_f64_of_bits(rcs_f64_bits(a) | rcs_f64_bits(b)); /* -0.0 if either is */
+    return a < b ? a : b;
 }
 static inline double rcs_max_f64(double a, double b) {
-    if (rcs_isnan(a) || rcs_isnan(b)) return a + b;
-    return a >= b ? a : b;
+    if (rcs_isnan(a) || rcs_isnan(b)) return rcs_nan_f64();
+    if (a == b) return rcs_f64_of_bits(rcs_f64_bits(a) & rcs_f64_bits(b)); /* 0.0 if either is */
+    return a > b ? a : b;
+}
+static inline double rcs_copysign_f64(double x, double y) {
+    uint64_t sign = rcs_isnan(y) ? 0u : (rcs_f64_bits(y) & RCS_F64_SIGN);
+    return rcs_f64_of_bits((rcs_f64_bits(x) & ~RCS_F64_SIGN) | sign);
+}
+static inline double rcs_trunc_f64(double x) {
+    uint64_t b = rcs_f64_bits(x);
+    int e = (int)((b >> 52) & 0x7ffu) - 1023;
+    if (e >= 52) return x;                               /* integral, inf or NaN */
+    if (e < 0) return rcs_f64_of_bits(b & RCS_F64_SIGN); /* |x| < 1: zero of x's sign */
+    return rcs_f64_of_bits(b & ~((UINT64_C(1) << (52 - e)) - 1u));
+}
+/* t - 1.0 and t + 1.0 are exact (t is a whole number below 2^52). */
+static inline double rcs_floor_f64(double x) { double t = rcs_trunc_f64(x); return x < t ? t - 1.0 : t; }
+static inline double rcs_ceil_f64(double x) { double t = rcs_trunc_f64(x); return x > t ? t + 1.0 : t; }
+static inline double rcs_round_even_f64(double x) {
+    uint64_t b = rcs_f64_bits(x);
+    int e = (int)((b >> 52) & 0x7ffu) - 1023;
+    if (e >= 52) return x;
+    if (e < -1) return rcs_f64_of_bits(b & RCS_F64_SIGN); /* |x| < 0.5 */
+    if (e == -1) /* 0.5 <= |x| < 1: 0.5 ties to 0, the rest rounds to 1 */
+        return rcs_f64_of_bits((b & RCS_F64_SIGN) | ((b & RCS_F64_MANT) ? UINT64_C(0x3ff0000000000000) : 0u));
+    {
+        int fb = 52 - e; /* 1..52 fraction bits */
+        uint64_t mask = (UINT64_C(1) << fb) - 1u, half = UINT64_C(1) << (fb - 1);
+        uint64_t frac = b & mask, r = b & ~mask;
+        bool odd = e == 0 || ((b >> fb) & 1u);
+        if (frac > half || (frac == half && odd)) r += UINT64_C(1) << fb; /* carries into the exponent */
+        return rcs_f64_of_bits(r);
+    }
+}
+/* Correctly rounded square root: the 54-bit integer root (53 bits and a
+ * guard bit) of the significand, one bit per step, then round to nearest even. */
+static inline double rcs_sqrt_f64(double x) {
+    uint64_t b, m, rem = 0u, q = 0u, guard;
+    int e, i;
+    if (rcs_isnan(x) || x < 0.0) return rcs_nan_f64();
+    if (x == 0.0 || x > 1.7976931348623157e308) return x; /* +-0.0, +inf */
+    b = rcs_f64_bits(x);
+    e = (int)((b >> 52) & 0x7ffu);
+    m = b & RCS_F64_MANT;
+    if (e == 0) { /* subnormal: normalise */
+        e = 1;
+        while (!(m & (UINT64_C(1) << 52))) { m <<= 1; e--; }
+    } else {
+        m |= UINT64_C(1) << 52;
+    }
+    e -= 1023; /* x == m * 2^(e - 52) */
+    if (e % 2 != 0) { m <<= 1; e -= 1; }
+    for (i = 53; i >= 0; i--) {
+        uint64_t two = 2 * i >= 54 ? (m >> (2 * i - 54)) & 3u : 0u, t;
+        rem = (rem << 2) | two;
+        t = (q << 2) | 1u;
+        q <<= 1;
+        if (rem >= t) { rem -= t; q |= 1u; }
+    }
+    guard = q & 1u;
+    q >>= 1;
+    if (guard && (rem != 0u || (q & 1u))) q++;
+    return rcs_f64_of_bits(((uint64_t)(e / 2 + 1023) << 52) + q - (UINT64_C(1) << 52));
 }
 
 /* ---- conversions ---- */

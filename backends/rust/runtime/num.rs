@@ -115,28 +115,182 @@ pub fn fabs(x: f64) -> f64 {
     f64::from_bits(x.to_bits() & !(1u64 << 63))
 }
 
-/// The smaller of `a` and `b`; NaN if either is NaN.
+// ---- the math built-ins: bit for bit as rcsc/semantics/numeric.py ----
+//
+// Integer algorithms on the IEEE-754 encoding (the twin of rcs_num.h): the
+// library is `no_std` (core has no `f64::sqrt` or `floor`), and none of it
+// depends on the rounding mode.  A zero result keeps the sign of x; NaN and
+// infinities come back unchanged (sqrt: NaN for x < 0).  min/max: NaN if
+// either is NaN, min(-0.0, 0.0) == -0.0 and max(-0.0, 0.0) == 0.0 in either
+// order (`f64::min` would return the other operand for a NaN).  copysign: a
+// NaN y counts as positive.
+
+const F64_SIGN: u64 = 1 << 63;
+const F64_MANT: u64 = (1 << 52) - 1;
+
+/// The smaller of `a` and `b`; NaN if either is NaN; -0.0 below 0.0.
 #[inline]
 pub fn min_f64(a: f64, b: f64) -> f64 {
     if a.is_nan() || b.is_nan() {
         f64::NAN
-    } else if a <= b {
+    } else if a == b {
+        f64::from_bits(a.to_bits() | b.to_bits())
+    } else if a < b {
         a
     } else {
         b
     }
 }
 
-/// The larger of `a` and `b`; NaN if either is NaN.
+/// The larger of `a` and `b`; NaN if either is NaN; 0.0 above -0.0.
 #[inline]
 pub fn max_f64(a: f64, b: f64) -> f64 {
     if a.is_nan() || b.is_nan() {
         f64::NAN
-    } else if a >= b {
+    } else if a == b {
+        f64::from_bits(a.to_bits() & b.to_bits())
+    } else if a > b {
         a
     } else {
         b
     }
+}
+
+/// |x| with the sign of y; a NaN y counts as positive.
+#[inline]
+pub fn copysign_f64(x: f64, y: f64) -> f64 {
+    let sign = if y.is_nan() {
+        0
+    } else {
+        y.to_bits() & F64_SIGN
+    };
+    f64::from_bits((x.to_bits() & !F64_SIGN) | sign)
+}
+
+/// The unbiased exponent of `b`'s encoding.
+#[inline]
+fn exponent(b: u64) -> i32 {
+    ((b >> 52) & 0x7ff) as i32 - 1023
+}
+
+/// x rounded toward zero.
+#[inline]
+pub fn trunc_f64(x: f64) -> f64 {
+    let b = x.to_bits();
+    let e = exponent(b);
+    if e >= 52 {
+        x
+    } else if e < 0 {
+        f64::from_bits(b & F64_SIGN)
+    } else {
+        f64::from_bits(b & !((1u64 << (52 - e)) - 1))
+    }
+}
+
+/// x rounded down (`t - 1.0` is exact: t is a whole number below 2^52).
+#[inline]
+pub fn floor_f64(x: f64) -> f64 {
+    let t = trunc_f64(x);
+    if x < t {
+        t - 1.0
+    } else {
+        t
+    }
+}
+
+/// x rounded up.
+#[inline]
+pub fn ceil_f64(x: f64) -> f64 {
+    let t = trunc_f64(x);
+    if x > t {
+        t + 1.0
+    } else {
+        t
+    }
+}
+
+/// x rounded to the nearest whole number, ties to even.
+#[inline]
+pub fn round_even_f64(x: f64) -> f64 {
+    let b = x.to_bits();
+    let e = exponent(b);
+    if e >= 52 {
+        x
+    } else if e < -1 {
+        f64::from_bits(b & F64_SIGN)
+    } else if e == -1 {
+        let one = if b & F64_MANT != 0 {
+            0x3ff0_0000_0000_0000
+        } else {
+            0
+        };
+        f64::from_bits((b & F64_SIGN) | one)
+    } else {
+        let fb = (52 - e) as u32;
+        let mask = (1u64 << fb) - 1;
+        let half = 1u64 << (fb - 1);
+        let frac = b & mask;
+        let mut r = b & !mask;
+        let odd = e == 0 || (b >> fb) & 1 == 1;
+        if frac > half || (frac == half && odd) {
+            r = r.wrapping_add(1u64 << fb);
+        }
+        f64::from_bits(r)
+    }
+}
+
+/// The correctly rounded square root: the 54-bit integer root (53 bits and
+/// a guard bit) of the significand, one bit per step, then round to nearest even.
+#[inline]
+pub fn sqrt_f64(x: f64) -> f64 {
+    if x.is_nan() || x < 0.0 {
+        return f64::NAN;
+    }
+    if x == 0.0 || x == f64::INFINITY {
+        return x;
+    }
+    let b = x.to_bits();
+    let mut e = ((b >> 52) & 0x7ff) as i32;
+    let mut m = b & F64_MANT;
+    if e == 0 {
+        e = 1;
+        while m & (1u64 << 52) == 0 {
+            m <<= 1;
+            e -= 1;
+        }
+    } else {
+        m |= 1u64 << 52;
+    }
+    e -= 1023;
+    if e % 2 != 0 {
+        m <<= 1;
+        e -= 1;
+    }
+    let mut rem: u64 = 0;
+    let mut q: u64 = 0;
+    let mut i: u32 = 54;
+    while i > 0 {
+        i -= 1;
+        let two = if 2 * i >= 54 {
+            (m >> (2 * i - 54)) & 3
+        } else {
+            0
+        };
+        rem = (rem << 2) | two;
+        let t = (q << 2) | 1;
+        q <<= 1;
+        if rem >= t {
+            rem -= t;
+            q |= 1;
+        }
+    }
+    let guard = q & 1;
+    q >>= 1;
+    if guard == 1 && (rem != 0 || q & 1 == 1) {
+        q += 1;
+    }
+    let exp = (e / 2 + 1023) as u64;
+    f64::from_bits(((exp << 52) + q).wrapping_sub(1u64 << 52))
 }
 
 // ---- time ----
@@ -152,4 +306,11 @@ pub fn tick(cycle: u64, ticks: u64) -> u64 {
 #[inline]
 pub fn cycles_ns(now: u64, since: u64, period_ns: i64) -> i64 {
     (now.wrapping_sub(since) as i64).wrapping_mul(period_ns)
+}
+
+/// `cycle` in a design: the number of the controller's step, from 1, when it
+/// steps every `divider`-th cycle of its CPU (cycles 1, 1 + divider, ...).
+#[inline]
+pub fn step_number(cycle: u64, divider: u64) -> i64 {
+    (cycle.wrapping_sub(1) / divider).wrapping_add(1) as i64
 }
