@@ -209,6 +209,77 @@ The name called is not a function, extern, record type or conversion, or an
 `extern` function is called inside a pure `fn` (pure functions must be the same
 on every target and cannot call hand-written code).
 """),
+    # ---- controller types and function blocks -------------------------------
+    ("E0260", _E, "unknown controller type or block", """
+`controller NAME: TYPE(...)` names a controller type that is not declared, or
+`block NAME: TYPE(...)` in a controller names a block that is not declared.
+The standard blocks need `import std.blocks`.
+
+    controller XAX: Axs(max_speed = 2.0)       // wrong: the type is `Axis`
+    controller XAX: Axis(max_speed = 2.0)      // right
+"""),
+    ("E0261", _E, "missing argument of a controller type or block", """
+Every parameter of a controller type or a block needs a value where it is
+instantiated; parameters have no defaults.
+
+    controller type Axis(max_speed: f64, cmd_out: gm) level 1 budget 1 ms { ... }
+    controller XAX: Axis(max_speed = 2.0)                     // wrong: no `cmd_out`
+    controller XAX: Axis(max_speed = 2.0, cmd_out = x_cmd)    // right
+"""),
+    ("E0262", _E, "extra or unknown argument", """
+An instance gives an argument the type (or block) has no parameter for, gives
+one twice, or gives more positional arguments than there are parameters; or a
+block call passes a value to something that is not one of the block's inputs.
+
+    block f: LP(k = 0.5, gain = 2.0)   // wrong: LP has no parameter `gain`
+    block f: LP(k = 0.5)               // right
+"""),
+    ("E0263", _E, "`gm` parameter not bound to Global Memory", """
+A `gm` parameter of a controller type stands for a Global Memory variable (or a
+field of one) that each instance chooses; its argument must be such a name, not
+an expression.
+
+    controller XAX: Axis(cmd_out = x_cmd + 1.0)   // wrong: an expression
+    controller XAX: Axis(cmd_out = x_cmd)         // right
+    controller YAX: Axis(cmd_out = table.y)       // right: a field
+"""),
+    ("E0264", _E, "parameter used as a variable", """
+The value parameters of a controller type or a block are compile-time constants
+inside it: they cannot be assigned, and a member cannot have a parameter's name.
+
+    controller type Axis(max_speed: f64) ... { post { max_speed = 1.0; } }   // wrong
+    controller type Axis(max_speed: f64) ... { local v: f64 = 0.0  post { v = max_speed; } }   // right
+"""),
+    ("E0265", _E, "misuse of a block's step", """
+A block has exactly one `step`, a list of assignments (no `if` statements, calls
+or commands: a choice is an `if ... then ... else` expression) to its own
+`state` and `output` members, evaluated in order each time the block is called.
+
+    step { if e > 0.0 { y = 1.0; } }          // wrong: a statement `if`
+    step { y = if e > 0.0 then 1.0 else y; }  // right
+"""),
+    ("E0266", _E, "misuse of a block instance", """
+From the controller, a block instance is run by calling it with its inputs,
+`pid(e = err);`, and read through its outputs, `pid.y`. Its state and inputs
+are private, its outputs are written only by its step, and the instance itself
+is not a value.
+
+    cmd = pid.integ;      // wrong: `integ` is state
+    pid.y = 0.0;          // wrong: outputs are written by the step
+    cmd = pid.y;          // right
+"""),
+    ("E0267", _E, "block instance defined twice", """
+Two `block` lines of one controller use the same name, or a block instance has
+the name of a status field or local of the controller.
+
+    block f: LP(k = 0.5)
+    block f: LP(k = 0.1)   // wrong: give it another name, e.g. `g`
+"""),
+    ("W0260", _W, "controller type or block never instantiated", """
+A controller type or block declared in the design has no instance. Its body is
+checked in each instance (with that instance's arguments), so with no instance
+it is not checked at all: instantiate it, or remove it.
+"""),
     # ---- hierarchy ----------------------------------------------------------
     ("E0300", _E, "controller has more than one supervisor", """
 RCS hierarchies are trees (paper sections 3.2 and 3.5): every controller takes

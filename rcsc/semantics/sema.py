@@ -16,6 +16,7 @@ import networkx as nx
 from rcsc.front import ast
 from rcsc.semantics import model as m
 from rcsc.diagnostics import Diagnostics
+from rcsc.front.instantiate import expand
 from rcsc.front.loader import LoadedFile
 from rcsc.front.source import Span
 from rcsc.semantics.typecheck import BUILTIN_FUNCS, CONVERSIONS, Checker, Globals, Scope
@@ -44,10 +45,10 @@ class _Sema:
     # ---- pass 1: names ---------------------------------------------------------
 
     def collect(self) -> None:
-        for f in self.files:
+        for f, items in zip(self.files, expand(self.files, self.d)):
             if f.tree is None:
                 continue
-            for item in f.tree.items:
+            for item in items:
                 name = getattr(item, "name", None)
                 if not isinstance(name, ast.Ident):
                     continue
@@ -259,6 +260,12 @@ class _Sema:
                 self.g.poisoned.add(use.name)
                 diag.with_help(f"declare it: `gm {use.name}: TYPE = VALUE`")
         checker = Checker(Scope(self.g, const_only=True), self.d)
+        for param, arg in item.param_args:  # a controller type's parameters are constants
+            pt = self.type_ref(param.type)
+            if not isinstance(pt, ErrorType):
+                value = checker.constant(arg, pt, f"the argument of `{param.name.name}`")
+                if value is not None:
+                    self.check_in_range(value.value, self.range_of(param.type, pt, checker), arg.span, pt)
         verbs = list(item.verbs)
         uses: list[Span | None] = [None] * len(verbs)
         used_sets: set[str] = set()
