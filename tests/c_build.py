@@ -77,6 +77,8 @@ def _examples() -> list[tuple[Path, Path]]:
     pairs.append((ROOT / "tests/bare/bare.rcs", ROOT / "tests/bare/bare.scn"))
     # Names that the naming schemes must keep apart (tests/test_naming.py).
     pairs.append((ROOT / "tests/naming/rcs_runtime.rcs", ROOT / "tests/naming/scenarios.scn"))
+    # Every block of std.blocks; a controller type with two instances.
+    pairs.append((ROOT / "tests/blocks/blocks.rcs", ROOT / "tests/blocks/blocks.scn"))
     return pairs
 
 
