@@ -287,6 +287,10 @@ class Controller(Node):
     # Set by rcsc.front.instantiate: (parameter, argument) of a controller
     # type's value parameters, for the semantic pass to check as constants.
     param_args: list = field(default_factory=list)
+    # Names the semantic pass must not report again (block instances, an
+    # instance that could not be made); `placeholder`: such an instance.
+    poisoned: list[str] = field(default_factory=list)
+    placeholder: bool = False
 
 
 # ---- controller types and function blocks (instantiated by rcsc.front.instantiate) ----

@@ -202,11 +202,10 @@ def expand(files, diags: Diagnostics) -> list[list[ast.Node]]:
             continue
         for item in f.tree.items:
             if isinstance(item, ast.ControllerInstance):
-                ctrl = _instantiate(item, ctypes, diags)
+                ctrl = _instantiate(item, ctypes, used, diags)
                 if ctrl is None:
                     items.append(_placeholder(item))
                     continue
-                used.add(item.type_name.name)
                 _lower_blocks(ctrl, btypes, used, diags)
                 items.append(ctrl)
             elif isinstance(item, ast.Controller) and item.blocks:
@@ -229,15 +228,18 @@ def expand(files, diags: Diagnostics) -> list[list[ast.Node]]:
 
 def _placeholder(item: ast.ControllerInstance) -> ast.Controller:
     """A controller with nothing in it, so that uses of the name are not also unknown."""
-    return ast.Controller(item.span, item.name, item.simulator)
+    ctrl = ast.Controller(item.span, item.name, item.simulator)
+    ctrl.placeholder = True
+    return ctrl
 
 
-def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerType], diags: Diagnostics) -> ast.Controller | None:
+def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerType], used: set[str], diags: Diagnostics) -> ast.Controller | None:
     t = ctypes.get(item.type_name.name)
     if t is None:
         diag = diags.add("E0260", item.type_name.span, f"no controller type named `{item.type_name.name}`", "unknown controller type")
         diag.with_note("controller types: " + (", ".join(f"`{n}`" for n in sorted(ctypes)) or "none declared"))
         return None
+    used.add(t.name.name)
     what = f"controller type `{t.name.name}`"
     bound = _bind(t.params, item.args, what, item.type_name, diags)
     if bound is None:
@@ -335,8 +337,10 @@ def _lower_blocks(ctrl: ast.Controller, btypes: dict[str, ast.BlockType], used: 
         if t is None:
             diag = diags.add("E0260", use.type_name.span, f"no block named `{use.type_name.name}`", "unknown block")
             diag.with_note("blocks: " + (", ".join(f"`{n}`" for n in sorted(btypes)) or "none declared") + " (`import std.blocks` for the standard ones)")
+            ctrl.poisoned.append(use.name.name)
             continue
         used.add(t.name.name)
+        ctrl.poisoned.append(use.name.name)
         if use.name.name in insts or use.name.name in taken:
             diags.add("E0267", use.name.span, f"`{use.name.name}` is defined more than once in `{ctrl.name.name}`", "second definition")
             continue

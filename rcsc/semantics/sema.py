@@ -241,6 +241,7 @@ class _Sema:
 
     def interface(self, item: ast.Controller) -> m.Controller:
         name = item.name.name
+        self.g.poisoned.update(item.poisoned)
         level, level_span = self._single(item.level, item, "level", lambda v: v[0], lambda v: v[1])
         budget, budget_span = self._single(item.budget, item, "budget", lambda v: v.nanos, lambda v: v.span)
         c = m.Controller(name, item.span, item.name.span, item.simulator, level or 0, budget or 0)
@@ -319,6 +320,8 @@ class _Sema:
         return c
 
     def _single(self, values, item: ast.Controller, what: str, get, span_of):
+        if not values and item.placeholder:  # an instance that could not be made: reported
+            return None, None
         if not values:
             self.d.add("E0209", item.name.span, f"controller `{item.name.name}` has no `{what}`", f"no `{what}`").with_help(
                 f"write it in the header: `controller {item.name.name} level 2 budget 1 ms {{`"
