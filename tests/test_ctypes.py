@@ -150,3 +150,16 @@ def test_lowpass_and_rate_limit(trace) -> None:
     assert rl[:4] == pytest.approx([0.2, 0.4, 0.6, 0.8])  # rise 20/s
     assert rl[7:10] == pytest.approx([0.3, -0.2, -0.7])  # fall 50/s
     assert rl[14:16] == pytest.approx([-3.0, -2.8])
+
+
+def test_every_standard_block_is_in_the_conformance_design() -> None:
+    import re
+
+    library = (ROOT / "stdlib/std/blocks.rcs").read_text(encoding="utf-8")
+    names = re.findall(r"^block (\w+)\(", library, re.M)
+    assert len(names) == 9, names
+    used = set(re.findall(r"^\s*block \w+: (\w+)\(", BLOCKS.read_text(encoding="utf-8"), re.M))
+    assert set(names) <= used, set(names) - used
+    from c_build import CONFORMANCE
+
+    assert (BLOCKS, BLOCKS_SCN) in CONFORMANCE
