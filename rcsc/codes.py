@@ -338,6 +338,21 @@ Fixed:
     controller type Axis(lo: f64, hi: f64) level 1 budget 1 ms { ... }
     controller XAX: Axis(lo = 0.0, hi = 600.0)
 """),
+    ("W0261", _W, "block instance never called", """
+A controller declares a block instance but never runs a step of it: its
+outputs keep their initial values forever, and its step is not checked
+(a step is checked where it is called).
+
+Wrong:
+
+    block filt: LOWPASS(tau = 0.5, dt = 0.01)
+    post { out = filt.y; }
+
+Fixed:
+
+    block filt: LOWPASS(tau = 0.5, dt = 0.01)
+    post { filt(x = raw); out = filt.y; }
+"""),
     # ---- hierarchy ----------------------------------------------------------
     ("E0300", _E, "controller has more than one supervisor", """
 RCS hierarchies are trees (paper sections 3.2 and 3.5): every controller takes

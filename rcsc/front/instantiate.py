@@ -379,6 +379,11 @@ def _lower_blocks(ctrl: ast.Controller, btypes: dict[str, ast.BlockType], used: 
             r.jobs = lower.stmts(r.jobs)
     for d in ctrl.status_fields + ctrl.locals:
         d.init = lower.copy(d.init)
+    for name, inst in insts.items():
+        if name not in lower.called:
+            diags.add("W0261", inst.use.name.span, f"block instance `{name}` is never called", "never called").with_help(
+                f"run one step of it each cycle: `pre {{ {name}(...); }}`, or remove it"
+            ).with_note("its outputs keep their initial values, and its step is not checked")
 
 
 class _UseCopier(_Copier):
@@ -388,6 +393,7 @@ class _UseCopier(_Copier):
         super().__init__(None, None)
         self.ctrl, self.insts, self.d = ctrl, insts, diags
         self.blocks = {u.name.name for u in ctrl.blocks}
+        self.called: set[str] = set()
 
     def stmts(self, body: list[ast.Stmt]) -> list[ast.Stmt]:
         out: list[ast.Stmt] = []
@@ -395,6 +401,7 @@ class _UseCopier(_Copier):
             if isinstance(st, ast.CallStmt) and st.call.func.name in self.blocks:
                 inst = self.insts.get(st.call.func.name)
                 if inst is not None:
+                    self.called.add(inst.use.name.name)
                     out.extend(self.call(inst, st))
                 continue
             if isinstance(st, ast.If):
