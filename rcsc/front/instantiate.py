@@ -185,6 +185,7 @@ def expand(files, diags: Diagnostics) -> list[list[ast.Node]]:
     with controller instances made into controllers and block instances lowered."""
     ctypes: dict[str, ast.ControllerType] = {}
     btypes: dict[str, ast.BlockType] = {}
+    broken: set[str] = set()  # types with repeated parameters: reported once, not instantiated
     for f in files:
         if f.tree is None:
             continue
@@ -194,6 +195,16 @@ def expand(files, diags: Diagnostics) -> list[list[ast.Node]]:
             elif isinstance(item, ast.BlockType):
                 btypes.setdefault(item.name.name, item)
     used: set[str] = set()
+    for t in [*ctypes.values(), *btypes.values()]:
+        seen: set[str] = set()
+        for p in t.params:
+            if p.name.name in seen:
+                diags.add("E0101", p.name.span, f"parameter `{p.name.name}` is defined more than once", "repeated parameter")
+                used.add(t.name.name)
+                broken.add(t.name.name)
+            seen.add(p.name.name)
+    for t in ctypes.values():  # a block a type uses is used (its findings come with the type's instances)
+        used.update(u.type_name.name for u in t.body.blocks)
     out: list[list[ast.Node]] = []
     for f in files:
         items: list[ast.Node] = []
@@ -202,15 +213,15 @@ def expand(files, diags: Diagnostics) -> list[list[ast.Node]]:
             continue
         for item in f.tree.items:
             if isinstance(item, ast.ControllerInstance):
-                ctrl = _instantiate(item, ctypes, used, diags)
+                ctrl = None if item.type_name.name in broken else _instantiate(item, ctypes, used, diags)
                 if ctrl is None:
                     items.append(_placeholder(item))
                     continue
-                _lower_blocks(ctrl, btypes, used, diags)
+                _lower_blocks(ctrl, btypes, used, diags, broken)
                 items.append(ctrl)
             elif isinstance(item, ast.Controller) and item.blocks:
                 ctrl = _Copier(None, None).copy(item)  # the tree stays what was written
-                _lower_blocks(ctrl, btypes, used, diags)
+                _lower_blocks(ctrl, btypes, used, diags, broken)
                 items.append(ctrl)
             else:
                 items.append(item)
@@ -329,10 +340,13 @@ class _StepCopier(_Copier):
         return new
 
 
-def _lower_blocks(ctrl: ast.Controller, btypes: dict[str, ast.BlockType], used: set[str], diags: Diagnostics) -> None:
+def _lower_blocks(ctrl: ast.Controller, btypes: dict[str, ast.BlockType], used: set[str], diags: Diagnostics, broken: set[str]) -> None:
     insts: dict[str, _Inst] = {}
     taken = {d.name.name for d in ctrl.status_fields + ctrl.locals}
     for use in ctrl.blocks:
+        if use.type_name.name in broken:
+            ctrl.poisoned.append(use.name.name)
+            continue
         t = btypes.get(use.type_name.name)
         if t is None:
             diag = diags.add("E0260", use.type_name.span, f"no block named `{use.type_name.name}`", "unknown block")
