@@ -163,3 +163,10 @@ def test_every_standard_block_is_in_the_conformance_design() -> None:
     from c_build import CONFORMANCE
 
     assert (BLOCKS, BLOCKS_SCN) in CONFORMANCE
+
+
+def test_many_mistakes_at_once_are_findings_not_a_crash() -> None:
+    result = check_path(str(ROOT / "tests/blocks/misuse.rcs"))
+    codes = sorted({d.code for d in result.diags.items})
+    assert codes == ["E0101", "E0206", "E0260", "E0262", "E0265", "E0266"], [(d.code, d.message) for d in result.diags.items]
+    assert all(d.span is not None and d.span.file.path.endswith("misuse.rcs") for d in result.diags.items)
