@@ -170,3 +170,13 @@ def test_many_mistakes_at_once_are_findings_not_a_crash() -> None:
     codes = sorted({d.code for d in result.diags.items})
     assert codes == ["E0101", "E0206", "E0260", "E0262", "E0265", "E0266"], [(d.code, d.message) for d in result.diags.items]
     assert all(d.span is not None and d.span.file.path.endswith("misuse.rcs") for d in result.diags.items)
+
+
+def test_editor_index_knows_types_and_instances() -> None:
+    from rcsc.editor import symbols
+
+    result = check_path(str(ROOT / "examples/machining_cell/machining_cell.rcs"))
+    idx = symbols.build([f.tree for f in result.files if f.tree is not None])
+    assert idx.controllers["XAX"].detail.startswith("controller XAX: Axis(lo = X_MIN")
+    assert idx.globals["Axis"].detail == "controller type Axis level 1 budget 300 us"
+    assert {"MOVE_TO", "INIT", "HALT", "following_mm"} <= set(idx.members["YAX"])  # completion of `YAX.`
