@@ -180,3 +180,34 @@ def test_editor_index_knows_types_and_instances() -> None:
     assert idx.controllers["XAX"].detail.startswith("controller XAX: Axis(lo = X_MIN")
     assert idx.globals["Axis"].detail == "controller type Axis level 1 budget 300 us"
     assert {"MOVE_TO", "INIT", "HALT", "following_mm"} <= set(idx.members["YAX"])  # completion of `YAX.`
+
+
+def test_a_check_finding_inside_a_type_is_reported_per_instance(tmp_path: Path) -> None:
+    """A finding of the plan checks (not of the type checker) in a type's plan."""
+    design = tmp_path / "d.rcs"
+    design.write_text("""design d
+gm a: f64 = 0.0 to env
+gm b: f64 = 0.0 to env
+controller type Axis(lim: f64, out: gm) level 1 budget 1 ms {
+    verb GO(v: f64)
+    writes out
+    plan GO {
+        G0: true | new -> S1 | out = cmd.v;
+        G1: out > lim | S1 -> done;
+        G2: out > 0.0 | S1 -> error(1);
+    }
+}
+controller TOP level 2 budget 1 ms { subordinates X, Y }
+controller X: Axis(lim = 1.0, out = a)
+controller Y: Axis(lim = 2.0, out = b)
+cpu main { heartbeat 10 ms  schedule TOP, X, Y }
+""", encoding="utf-8")
+    result = check_path(str(design))
+    overlaps = [d for d in result.diags.items if d.code == "W0517"]  # S1 can wait forever
+    assert len(overlaps) == 2, [(d.code, d.message) for d in result.diags.items]
+    assert sorted(lb.message for d in overlaps for lb in d.labels if lb.message.startswith("in instance")) == [
+        "in instance `X` of `Axis` declared here", "in instance `Y` of `Axis` declared here"]
+    assert all(d.span.line == 9 for d in overlaps)
+    # Each instance's own witness: its own Global Memory.
+    assert sorted(n for d in overlaps for n in d.notes if n.startswith("witness")) == [
+        "witness: a = 0.0 (fixed while the plan waits)", "witness: b = 0.0 (fixed while the plan waits)"]
