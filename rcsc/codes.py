@@ -209,6 +209,150 @@ The name called is not a function, extern, record type or conversion, or an
 `extern` function is called inside a pure `fn` (pure functions must be the same
 on every target and cannot call hand-written code).
 """),
+    # ---- controller types and function blocks -------------------------------
+    ("E0260", _E, "unknown controller type or block", """
+`controller NAME: TYPE(...)` names a controller type that is not declared, or
+`block NAME: TYPE(...)` in a controller names a block that is not declared.
+The standard blocks need `import std.blocks`.
+
+Wrong:
+
+    controller XAX: Axs(lo = 0.0, hi = 600.0)
+
+Fixed:
+
+    controller XAX: Axis(lo = 0.0, hi = 600.0)
+"""),
+    ("E0261", _E, "missing argument of a controller type or block", """
+Every parameter of a controller type or a block needs a value where it is
+instantiated: parameters have no defaults.
+
+Wrong:
+
+    controller type Axis(max_speed: f64, pos_cmd: gm) level 1 budget 1 ms { ... }
+    controller XAX: Axis(max_speed = 2.0)
+
+Fixed:
+
+    controller XAX: Axis(max_speed = 2.0, pos_cmd = x_cmd)
+"""),
+    ("E0262", _E, "extra or unknown argument", """
+An instance gives an argument the type (or block) has no parameter for, gives
+one twice, or gives more positional arguments than there are parameters; or a
+call of a block instance passes a value to something that is not one of the
+block's inputs.
+
+Wrong:
+
+    block f: LOWPASS(tau = 0.5, dt = 0.01, gain = 2.0)
+
+Fixed:
+
+    block f: LOWPASS(tau = 0.5, dt = 0.01)
+"""),
+    ("E0263", _E, "`gm` parameter not bound to Global Memory", """
+A `gm` parameter of a controller type stands for a Global Memory variable (or a
+field of one) that each instance chooses; its argument must be such a name, not
+an expression.
+
+Wrong:
+
+    controller XAX: Axis(pos_cmd = x_cmd + 1.0)
+
+Fixed:
+
+    controller XAX: Axis(pos_cmd = x_cmd)
+    controller YAX: Axis(pos_cmd = table.y)    // a field is fine
+"""),
+    ("E0264", _E, "parameter used as a variable", """
+The value parameters of a controller type or a block are compile-time constants
+inside it: they cannot be assigned, and a member cannot have a parameter's name.
+
+Wrong:
+
+    controller type Axis(max_speed: f64) level 1 budget 1 ms {
+        post { max_speed = 1.0; }
+    }
+
+Fixed:
+
+    controller type Axis(max_speed: f64) level 1 budget 1 ms {
+        local speed: f64 = 0.0
+        post { speed = max_speed; }
+    }
+"""),
+    ("E0265", _E, "misuse of a block's step", """
+A block has exactly one `step`: a list of assignments to its own `state` and
+`output` members, run in order each time the block is called. It has no `if`
+statements, calls or commands (a choice is an `if ... then ... else`
+expression), and it does not assign its inputs or parameters.
+
+Wrong:
+
+    step { if e > 0.0 { y = 1.0; } }
+
+Fixed:
+
+    step { y = if e > 0.0 then 1.0 else y; }
+"""),
+    ("E0266", _E, "misuse of a block instance", """
+From the controller, a block instance is run by calling it with its inputs,
+`pid(err = e);`, and read through its outputs, `pid.y`. Its state and inputs
+are private, its outputs are written only by its step, and the instance itself
+is not a value.
+
+Wrong:
+
+    post { u = pid.integ; pid.y = 0.0; }
+
+Fixed:
+
+    post { pid(err = e); u = pid.y; }
+"""),
+    ("E0267", _E, "block instance defined twice", """
+Two `block` lines of one controller use the same name, or a block instance has
+the name of a status field or local of the controller. Each instance has its
+own state, so each needs its own name.
+
+Wrong:
+
+    block f: LOWPASS(tau = 0.5, dt = 0.01)
+    block f: LOWPASS(tau = 0.1, dt = 0.01)
+
+Fixed:
+
+    block f: LOWPASS(tau = 0.5, dt = 0.01)
+    block g: LOWPASS(tau = 0.1, dt = 0.01)
+"""),
+    ("W0260", _W, "controller type or block never instantiated", """
+A controller type or block declared in the design has no instance. Its body is
+checked in each instance (with that instance's arguments), so with none it is
+not checked at all: instantiate it, or remove it.
+
+Wrong:
+
+    controller type Axis(lo: f64, hi: f64) level 1 budget 1 ms { ... }
+
+Fixed:
+
+    controller type Axis(lo: f64, hi: f64) level 1 budget 1 ms { ... }
+    controller XAX: Axis(lo = 0.0, hi = 600.0)
+"""),
+    ("W0261", _W, "block instance never called", """
+A controller declares a block instance but never runs a step of it: its
+outputs keep their initial values forever, and its step is not checked
+(a step is checked where it is called).
+
+Wrong:
+
+    block filt: LOWPASS(tau = 0.5, dt = 0.01)
+    post { out = filt.y; }
+
+Fixed:
+
+    block filt: LOWPASS(tau = 0.5, dt = 0.01)
+    post { filt(x = raw); out = filt.y; }
+"""),
     # ---- hierarchy ----------------------------------------------------------
     ("E0300", _E, "controller has more than one supervisor", """
 RCS hierarchies are trees (paper sections 3.2 and 3.5): every controller takes

@@ -58,8 +58,25 @@ class Diagnostic:
 
     def with_label(self, span: Span | None, message: str) -> "Diagnostic":
         if span is not None:
-            self.labels.append(Label(span, message))
+            self.labels.append(Label(plain_span(span)[0], message))
         return self
+
+
+def plain_span(span: Span) -> tuple[Span, list[Label], str]:
+    """A span inside an instance of a controller type or a block (its file an
+    `rcsc.front.instantiate.InstanceSource`) as the span of the text written:
+    (span in the real file, labels that name the instance(s), a key that
+    tells the instances apart)."""
+    labels: list[Label] = []
+    key = ""
+    while getattr(span.file, "instance", None) is not None:
+        message, where = span.file.instance
+        span = Span(span.file.origin, span.start, span.end)
+        where, outer, outer_key = plain_span(where)
+        labels.append(Label(where, message))
+        labels.extend(outer)
+        key += f"/{where.start}{outer_key}"
+    return span, labels, key
 
 
 class Diagnostics:
@@ -86,8 +103,15 @@ class Diagnostics:
         if code not in CODES:
             raise KeyError(f"internal error: diagnostic code {code} is not registered")
         sev = severity or CODES[code].severity
-        diag = Diagnostic(code, sev, message, span, label)
+        labels: list[Label] = []
+        instance = ""
+        if span is not None:
+            span, labels, instance = plain_span(span)
+        diag = Diagnostic(code, sev, message, span, label, labels)
         key = (code, message, span.file.path if span else "", span.start if span else -1)
+        if instance:
+            key += (instance,)
+        diag._key = key  # type: ignore[attr-defined]
         if key not in self._seen:
             self._seen.add(key)
             self.items.append(diag)
@@ -95,7 +119,7 @@ class Diagnostics:
 
     def extend(self, other: "Diagnostics") -> None:
         for d in other.items:
-            key = (d.code, d.message, d.span.file.path if d.span else "", d.span.start if d.span else -1)
+            key = getattr(d, "_key", None) or (d.code, d.message, d.span.file.path if d.span else "", d.span.start if d.span else -1)
             if key not in self._seen:
                 self._seen.add(key)
                 self.items.append(d)

@@ -79,6 +79,8 @@ def _examples() -> list[tuple[Path, Path]]:
     pairs.append((ROOT / "tests/mathfn/mathfn.rcs", ROOT / "tests/mathfn/mathfn.scn"))
     # Names that the naming schemes must keep apart (tests/test_naming.py).
     pairs.append((ROOT / "tests/naming/rcs_runtime.rcs", ROOT / "tests/naming/scenarios.scn"))
+    # Every block of std.blocks; a controller type with two instances.
+    pairs.append((ROOT / "tests/blocks/blocks.rcs", ROOT / "tests/blocks/blocks.scn"))
     return pairs
 
 

@@ -136,6 +136,12 @@ def test_synthetic_designs_parse_the_same() -> None:
 
 # A word is a keyword only where the grammar expects it; elsewhere it is a name.
 CORNERS = [
+    # controller types, instances and function blocks
+    "design d\ncontroller type T(a: f64 in 0.0..1.0, b: gm, c: i32,) level 1 budget 1 ms {\n block f: LP(k = a)\n}\ncontroller X: T(a = 1.0, b = g.x, c = 2)\n",
+    "design d\nsimulator type S() level 0 budget 1 ms { }\nsimulator P: S()\ncontroller Q: T(1.0, x)\n",
+    "design d\nblock B(k: f64) {\n input x: f64 = 0.0\n state s: bool = false\n output y: f64 = k\n step { y = x; s = not s; }\n step { }\n}\nblock E() { }\n",
+    "design d\ncontroller C level 1 budget 1 ms {\n block f: B()\n post { f(x = 1.0); f(2.0); }\n plan P { P0: f.y > 0.0 | new -> done | f(); }\n}\n",
+    "design d\nconst type: i32 = 1\nconst step: i32 = type\nconst input: i32 = state\n",  # new keywords are names elsewhere
     "design d\ngm x: f64 = 0.0 to env\ngm y: f64 = 0.0 from env\ngm to: i32 = 0\n",  # `to env` and `from env`
     "design d\ncontroller C level 1 budget 1 ms period 20 ms {\n}\n",  # the `period` attribute
     "design d\nconst A: i32 = and\n",  # `and` cannot start an expression: a name

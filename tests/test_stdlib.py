@@ -128,4 +128,4 @@ def test_a_lifecycle_verb_without_plan_is_reported_at_the_verbs_line(tmp_path: P
 
 
 def test_stdlib_modules_listed() -> None:
-    assert stdlib_modules() == ["std.lifecycle", "std.math"]
+    assert stdlib_modules() == ["std.blocks", "std.lifecycle", "std.math"]

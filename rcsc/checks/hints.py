@@ -45,7 +45,8 @@ def _controller_at(design: Design, d: Diagnostic):
     if d.span is None:
         return None
     for c in design.controllers.values():
-        if c.span.file is d.span.file and c.span.start <= d.span.start < c.span.end:
+        # An instance of a controller type spans its type's text (in a view of the file).
+        if getattr(c.span.file, "origin", c.span.file) is d.span.file and c.span.start <= d.span.start < c.span.end:
             return c
     return None
 

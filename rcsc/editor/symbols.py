@@ -98,9 +98,23 @@ def build(files: list[ast.File]) -> Index:
                 sym = _controller(item, idx)
                 idx.controllers[item.name.name] = sym
                 idx.add_global(sym, path)
+            elif isinstance(item, ast.ControllerType):  # its instances share its members
+                sym = _controller(item.body, idx)
+                sym.detail = "controller type " + sym.detail[len("controller "):]
+                idx.add_global(sym, path)
+            elif isinstance(item, ast.ControllerInstance):
+                sym = Symbol(item.name.name, "controller", item.name.span, item.span, _squash(item.span.text))
+                idx.controllers[item.name.name] = sym
+                idx.add_global(sym, path)
+    for tree in files:
+        for item in tree.items:
+            if isinstance(item, ast.ControllerInstance):
+                idx.members[item.name.name] = idx.members.get(item.type_name.name, {})
     # Verbs a controller takes through `verbs SET` belong to it too.
     for tree in files:
         for item in tree.items:
+            if isinstance(item, ast.ControllerType):
+                item = item.body
             if isinstance(item, ast.Controller):
                 members = idx.members[item.name.name]
                 for set_name in item.verb_sets:

@@ -303,6 +303,75 @@ class Controller(Node):
     post: list[tuple[Span, list[Stmt]]] = field(default_factory=list)
     plans: list[Plan] = field(default_factory=list)
     doc: DocComment | None = None
+    blocks: list["BlockUse"] = field(default_factory=list)
+    # Set by rcsc.front.instantiate: (parameter, argument) of a controller
+    # type's value parameters, for the semantic pass to check as constants.
+    param_args: list = field(default_factory=list)
+    # Names the semantic pass must not report again (block instances, an
+    # instance that could not be made); `placeholder`: such an instance.
+    poisoned: list[str] = field(default_factory=list)
+    placeholder: bool = False
+
+
+# ---- controller types and function blocks (instantiated by rcsc.front.instantiate) ----
+
+
+@dataclass(slots=True)
+class TypeParam(Node):
+    """A parameter of a controller type: a compile-time constant (`max: f64`)
+    or, with `type` None, a Global Memory binding (`cmd_out: gm`)."""
+
+    name: Ident
+    type: TypeRef | None
+
+
+@dataclass(slots=True)
+class ControllerType(Node):
+    """`controller type NAME(params) attrs { body }`: `body` is the template
+    (a controller named after the type)."""
+
+    name: Ident
+    params: list[TypeParam]
+    body: Controller
+
+
+@dataclass(slots=True)
+class ControllerInstance(Node):
+    """`controller NAME: TYPE(args)`."""
+
+    name: Ident
+    simulator: bool
+    type_name: Ident
+    args: list[Arg]
+
+
+@dataclass(slots=True)
+class BlockUse(Node):
+    """`block NAME: TYPE(args)` in a controller: one instance of a function block."""
+
+    name: Ident
+    type_name: Ident
+    args: list[Arg]
+
+
+@dataclass(slots=True)
+class BlockMember(Node):
+    """`input NAME: type = init`, `state ...` or `output ...` of a block."""
+
+    kind: str  # "input", "state", "output"
+    name: Ident
+    type: TypeRef
+    init: Expr
+
+
+@dataclass(slots=True)
+class BlockType(Node):
+    """`block NAME(params) { members; step { ... } }`: a function block."""
+
+    name: Ident
+    params: list[Param]
+    members: list[BlockMember]
+    steps: list[tuple[Span, list[Stmt]]]
 
 
 @dataclass(slots=True)

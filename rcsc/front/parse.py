@@ -351,6 +351,59 @@ class _ToAst(Transformer_NonRecursive):
                 getattr(ctrl, key).append(value)
         return ctrl
 
+    # -- controller types and function blocks ---------------------------------
+
+    @v_args(meta=True)
+    def ctype_decl(self, meta, children):
+        kind, name, params, *rest = children
+        body = self.controller_decl(meta, [kind, name, *rest])
+        return ast.ControllerType(self.span(meta), self.ident(name), params or [], body)
+
+    @v_args(meta=True)
+    def tparams(self, meta, children):
+        return list(children)
+
+    @v_args(meta=True)
+    def tparam_value(self, meta, children):
+        return ast.TypeParam(self.span(meta), self.ident(children[0]), children[1])
+
+    @v_args(meta=True)
+    def tparam_gm(self, meta, children):
+        return ast.TypeParam(self.span(meta), self.ident(children[0]), None)
+
+    @v_args(meta=True)
+    def cinst_decl(self, meta, children):
+        kind, name, type_name, args = children
+        return ast.ControllerInstance(self.span(meta), self.ident(name), str(kind) == "simulator", self.ident(type_name), args or [])
+
+    @v_args(meta=True)
+    def block_use(self, meta, children):
+        name, type_name, args = children
+        return ("blocks", ast.BlockUse(self.span(meta), self.ident(name), self.ident(type_name), args or []))
+
+    @v_args(meta=True)
+    def fblock_decl(self, meta, children):
+        name, params, *items = children
+        members = [i for i in items if isinstance(i, ast.BlockMember)]
+        steps = [i for i in items if isinstance(i, tuple)]
+        return ast.BlockType(self.span(meta), self.ident(name), params or [], members, steps)
+
+    @v_args(meta=True)
+    def block_input(self, meta, children):
+        return ast.BlockMember(self.span(meta), "input", self.ident(children[0]), children[1], children[2])
+
+    @v_args(meta=True)
+    def block_state(self, meta, children):
+        return ast.BlockMember(self.span(meta), "state", self.ident(children[0]), children[1], children[2])
+
+    @v_args(meta=True)
+    def block_output(self, meta, children):
+        return ast.BlockMember(self.span(meta), "output", self.ident(children[0]), children[1], children[2])
+
+    @v_args(meta=True)
+    def block_step(self, meta, children):
+        return (self.span(meta), children[0])
+
     # -- plans -----------------------------------------------------------------
 
     @v_args(meta=True)

@@ -310,11 +310,85 @@ class _Parser:
 
     # ---- controllers -------------------------------------------------------------
 
-    def controller_decl(self) -> ast.Controller:
+    def controller_decl(self) -> ast.Node:
         first = self.i
         simulator = self.toks[self.i] == "simulator"
         self.i += 1
+        if self.toks[self.i] == "type":
+            self.i += 1
+            name = self.name()
+            self.expect("(")
+            params = self.type_params()
+            self.expect(")")
+            body = self.controller_rest(first, name, simulator)
+            return ast.ControllerType(self.span(first), name, params, body)
         name = self.name()
+        if self.toks[self.i] == ":":
+            self.i += 1
+            type_name = self.name()
+            self.expect("(")
+            args = self.args()
+            return ast.ControllerInstance(self.span(first), name, simulator, type_name, args)
+        return self.controller_rest(first, name, simulator)
+
+    def type_params(self) -> list[ast.TypeParam]:
+        out = []
+        while self.toks[self.i] != ")":
+            first = self.i
+            name = self.name()
+            self.expect(":")
+            if self.toks[self.i] == "gm":
+                self.i += 1
+                out.append(ast.TypeParam(self.span(first), name, None))
+            else:
+                type_ = self.type_ref()
+                out.append(ast.TypeParam(self.span(first), name, type_))
+            if self.toks[self.i] != ",":
+                break
+            self.i += 1
+        return out
+
+    def block_use(self):
+        first = self.i
+        self.i += 1
+        name = self.name()
+        self.expect(":")
+        type_name = self.name()
+        self.expect("(")
+        args = self.args()
+        return "blocks", ast.BlockUse(self.span(first), name, type_name, args)
+
+    def fblock_decl(self) -> ast.BlockType:
+        first = self.i
+        self.i += 1
+        name = self.name()
+        self.expect("(")
+        params = self.params(")")
+        self.expect(")")
+        self.expect("{")
+        members, steps = [], []
+        toks = self.toks
+        while toks[self.i] != "}":
+            start = self.i
+            kind = toks[start]
+            if kind == "step":
+                self.i += 1
+                body = self.block()
+                steps.append((self.span(start), body))
+                continue
+            if kind not in ("input", "state", "output"):
+                raise Fallback
+            self.i += 1
+            mname = self.name()
+            self.expect(":")
+            type_ = self.type_ref()
+            self.expect("=")
+            init = self.expr()
+            members.append(ast.BlockMember(self.span(start), kind, mname, type_, init))
+        self.i += 1
+        return ast.BlockType(self.span(first), name, params, members, steps)
+
+    def controller_rest(self, first: int, name: ast.Ident, simulator: bool) -> ast.Controller:
         found: list[tuple[str, object]] = []
         toks = self.toks
         while True:
@@ -770,6 +844,7 @@ _ITEMS = {
     "verbset": _Parser.verbset_decl,
     "controller": _Parser.controller_decl,
     "simulator": _Parser.controller_decl,
+    "block": _Parser.fblock_decl,
     "cpu": _Parser.cpu_decl,
 }
 
@@ -794,6 +869,7 @@ _CTRL_ITEMS = {
     "pre": _Parser.pre_block,
     "post": _Parser.post_block,
     "plan": _Parser.plan_item,
+    "block": _Parser.block_use,
 }
 
 _CPU_ITEMS = {

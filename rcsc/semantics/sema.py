@@ -16,6 +16,7 @@ import networkx as nx
 from rcsc.front import ast
 from rcsc.semantics import model as m
 from rcsc.diagnostics import Diagnostics
+from rcsc.front.instantiate import expand
 from rcsc.front.loader import LoadedFile
 from rcsc.front.source import Span
 from rcsc.semantics.typecheck import BUILTIN_FUNCS, CONVERSIONS, MATH_FUNCS, Checker, Globals, Scope
@@ -50,10 +51,10 @@ class _Sema:
     # ---- pass 1: names ---------------------------------------------------------
 
     def collect(self) -> None:
-        for f in self.files:
+        for f, items in zip(self.files, expand(self.files, self.d)):
             if f.tree is None:
                 continue
-            for item in f.tree.items:
+            for item in items:
                 name = getattr(item, "name", None)
                 if not isinstance(name, ast.Ident):
                     continue
@@ -246,6 +247,7 @@ class _Sema:
 
     def interface(self, item: ast.Controller) -> m.Controller:
         name = item.name.name
+        self.g.poisoned.update(item.poisoned)
         level, level_span = self._single(item.level, item, "level", lambda v: v[0], lambda v: v[1])
         budget, budget_span = self._single(item.budget, item, "budget", lambda v: v.nanos, lambda v: v.span)
         c = m.Controller(name, item.span, item.name.span, item.simulator, level or 0, budget or 0, doc=_doc(item))
@@ -265,6 +267,12 @@ class _Sema:
                 self.g.poisoned.add(use.name)
                 diag.with_help(f"declare it: `gm {use.name}: TYPE = VALUE`")
         checker = Checker(Scope(self.g, const_only=True), self.d)
+        for param, arg in item.param_args:  # a controller type's parameters are constants
+            pt = self.type_ref(param.type)
+            if not isinstance(pt, ErrorType):
+                value = checker.constant(arg, pt, f"the argument of `{param.name.name}`")
+                if value is not None:
+                    self.check_in_range(value.value, self.range_of(param.type, pt, checker), arg.span, pt)
         verbs = list(item.verbs)
         uses: list[Span | None] = [None] * len(verbs)
         used_sets: set[str] = set()
@@ -318,6 +326,8 @@ class _Sema:
         return c
 
     def _single(self, values, item: ast.Controller, what: str, get, span_of):
+        if not values and item.placeholder:  # an instance that could not be made: reported
+            return None, None
         if not values:
             diag = self.d.add("E0209", item.name.span, f"controller `{item.name.name}` has no `{what}`", f"no `{what}`").with_help(
                 f"write it in the header: `controller {item.name.name} level {1 if not item.subordinates else 2} budget 1 ms {{`"
