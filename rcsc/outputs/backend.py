@@ -42,6 +42,7 @@ _REGISTRY: dict[str, str] = {
     # name -> module that defines the target class (imported on first use)
     "c": "rcsc.backends.c",
     "rust": "rcsc.backends.rust",
+    "ada": "rcsc.backends.ada",
 }
 _LOADED: dict[str, type["Target"]] = {}
 
@@ -386,6 +387,9 @@ class Target:
     # Builds several CPUs (a transport between their processes), divided
     # rates and Global Memory stamps; a target without them refuses such designs.
     multi_cpu = False
+    # Steps controllers at divided rates on one CPU (`period`) and keeps the
+    # stamps of Global Memory for `age(V)`; a target with several CPUs does.
+    multi_rate = False
     # The transports (BuildOptions.transport) this target can generate.
     transports: tuple[str, ...] = ("shm",)
     MAX_CPUS = 64  # the transport keeps one bit per reading CPU in a 64-bit word
@@ -421,6 +425,8 @@ class Target:
                 "second CPU",
             )
             d.with_label(cpus[0].name_span, "first CPU")
+        if self.multi_rate:
+            return
         for c in self.design.controllers.values():
             if c.divider > 1:
                 diags.add("E0800", c.period_span or c.name_span, f"the {self.name} target steps every controller every cycle; `{c.name}` has a period", "divided rate")
