@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import re
+import sys
 
 from rcsc.semantics import model as m
 from rcsc.backends.ada.naming import AdaNames
@@ -193,6 +194,9 @@ class AdaBackend(Target):
                 return "Rcs_Num.Inf" if x > 0 else "(-Rcs_Num.Inf)"
             if x == 0 and math.copysign(1.0, x) < 0:
                 return "Rcs_Num.Neg_F64 (F64'(0.0))"  # a static -0.0 would be exact zero
+            if abs(x) < sys.float_info.min:
+                num, den = abs(x).as_integer_ratio()  # den is a power of two
+                return f"Rcs_Num.Scale (F64'({'-' if x < 0 else ''}{num}.0), -{den.bit_length() - 1})"
             text = repr(abs(x))
             mant, _, exp = text.partition("e")
             if "." not in mant:
@@ -268,6 +272,8 @@ class AdaBackend(Target):
 
     def unary_expr(self, e: m.Unary) -> str:
         v = self.expr(e.operand)
+        if isinstance(e.operand, m.Unary) and e.operand.op == e.op:
+            v = self.same(e.operand, v)  # `not not x` is legal in a design; GNAT warns of it
         if e.op == "not":
             return f"(not {v})"
         if e.type.name in ("i32", "i64", "u32", "duration"):
@@ -332,6 +338,8 @@ class AdaBackend(Target):
         pad = "   " * indent
         target, value = self.lvalue(s.target), _strip(self.expr(s.value))
         if s.op == "=":
+            if value == target:  # `x = x` is legal in a design, and does nothing; GNAT warns of it
+                return [f"{pad}null; --  {self.comment(target)} := itself"]
             return [f"{pad}{target} := {value};"]
         op, t = s.op[0], s.target.type
         if t.name in ("i32", "i64", "u32", "duration"):

@@ -82,6 +82,9 @@ package Rcs_Num with SPARK_Mode, Pure is
    --  -0.0 (a static -0.0 is exact zero, without its sign).
    function Neg_F64 (X : F64) return F64 is (-X);
 
+   --  X * 2**N, for a subnormal constant (a static one would lose precision, GNAT warns).
+   function Scale (X : F64; N : Integer) return F64 is (F64'Scaling (X, N));
+
    --  NaN and infinity have no literal; computed at run time.
    function Inf return F64;
    function NaN return F64;
