@@ -194,7 +194,7 @@ class AdaBackend(Target):
                 return "Rcs_Num.Inf" if x > 0 else "(-Rcs_Num.Inf)"
             if x == 0 and math.copysign(1.0, x) < 0:
                 return "Rcs_Num.Neg_F64 (F64'(0.0))"  # a static -0.0 would be exact zero
-            if abs(x) < sys.float_info.min:
+            if 0 < abs(x) < sys.float_info.min:
                 num, den = abs(x).as_integer_ratio()  # den is a power of two
                 return f"Rcs_Num.Scale (F64'({'-' if x < 0 else ''}{num}.0), -{den.bit_length() - 1})"
             text = repr(abs(x))
