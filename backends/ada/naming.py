@@ -78,7 +78,7 @@ class AdaNames:
 
     def frag(self, name: str) -> str:
         """The Ada form of one design name."""
-        return name if self.simple(name) else "X0" + name.encode("utf-8").hex()
+        return _shorten(name if self.simple(name) else "X0" + name.encode("utf-8").hex())
 
     def join(self, *parts: str) -> str:
         return _shorten(SEP.join(parts))
