@@ -127,3 +127,25 @@ def test_ada_literals_carry_their_type_and_keep_every_double() -> None:
     assert tg.literal(-0.0, F64) == "Rcs_Num.Neg_F64 (F64'(0.0))"
     assert tg.literal(5e-324, F64) == "Rcs_Num.Scale (F64'(1.0), -1074)"
     assert tg.literal(float("nan"), F64) == "Rcs_Num.NaN" and tg.literal(float("-inf"), F64) == "(-Rcs_Num.Inf)"
+
+
+def test_rcsc_test_runs_the_scenarios_on_the_ada_program(tmp_path: Path) -> None:
+    """`rcsc test --target ada` builds through the target's build_commands/program (as for c
+    and rust) and evaluates the expectations on the Ada program's trace, a failing one too."""
+    import shutil
+
+    from rcsc import cli
+
+    folder = tmp_path / "sub"
+    (folder / "scenarios").mkdir(parents=True)
+    shutil.copy(ROOT / "examples/submarine/submarine.rcs", folder / "submarine.rcs")
+    shutil.copy(ROOT / "examples/submarine/scenarios/ahead_12_knots.scn", folder / "scenarios")
+    (folder / "scenarios" / "made_to_fail.scn").write_text("cycles 12\nat 1: SM.INIT()\nexpect at 4: SM.done and ship_speed > 1.0\n", encoding="utf-8")
+    import contextlib
+    import io
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+        rc = cli.main(["test", "--target", "ada", "--build-dir", str(tmp_path / "b"), str(folder)])
+    assert rc == 1, out.getvalue()
+    assert "PASS " in out.getvalue() and "FAIL " in out.getvalue() and out.getvalue().endswith("1 passed, 1 failed\n"), out.getvalue()

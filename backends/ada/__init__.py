@@ -15,6 +15,7 @@ into, are rendered by the C target (`rcsc.backends.c`).  See docs/backends.md.
 from __future__ import annotations
 
 import math
+import os
 import re
 import sys
 
@@ -122,6 +123,12 @@ class AdaBackend(Target):
             files.append(OutFile(f"{c.n.p}_io.c", c.render("io_stub.c.j2", **common), user=True))
         files.append(OutFile(PROJECT, self.render("project.gpr.j2", mains=mains)))
         return files
+
+    def build_commands(self, folder: str) -> list[tuple[list[str], dict[str, str] | None]]:
+        return [(["gprbuild", "-q", "-P", PROJECT], None)]
+
+    def program(self, folder: str) -> str:
+        return os.path.join(folder, self.c.n.binary(next(iter(self.design.cpus))))
 
     def context(self) -> dict:
         n = self.n

@@ -54,6 +54,11 @@ def register(cls: type["Target"]) -> type["Target"]:
     return cls
 
 
+def target_names() -> list[str]:
+    """The registered targets' names, sorted, without importing them."""
+    return sorted(_REGISTRY)
+
+
 def targets() -> list[type["Target"]]:
     """Every registered target class, sorted by name."""
     return [get_target(n) for n in sorted(_REGISTRY)]
@@ -465,6 +470,18 @@ class Target:
     # ---- output --------------------------------------------------------------------
 
     def files(self) -> list[OutFile]:
+        raise NotImplementedError
+
+    # ---- compiling a written build (`rcsc test --target NAME`) -------------------------
+
+    def build_commands(self, folder: str) -> list[tuple[list[str], dict[str, str] | None]]:
+        """The commands that compile the files of `files()` once written to `folder`:
+        (argv, extra environment or None), run in `folder` in order."""
+        raise NotImplementedError
+
+    def program(self, folder: str) -> str:
+        """The program those commands make that runs the design: the Main Program of a
+        single-CPU design, the launcher of a design with several CPUs."""
         raise NotImplementedError
 
     def render(self, template: str, **context) -> str:
