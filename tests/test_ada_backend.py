@@ -149,3 +149,27 @@ def test_rcsc_test_runs_the_scenarios_on_the_ada_program(tmp_path: Path) -> None
         rc = cli.main(["test", "--target", "ada", "--build-dir", str(tmp_path / "b"), str(folder)])
     assert rc == 1, out.getvalue()
     assert "PASS " in out.getvalue() and "FAIL " in out.getvalue() and out.getvalue().endswith("1 passed, 1 failed\n"), out.getvalue()
+
+
+def test_deployment_build_leaves_out_the_simulators(tmp_path: Path) -> None:
+    """`--exclude-simulators`: no package for a simulator, the plant I/O hooks (C, yours) are
+    called around the schedule, and the project still builds warning-free and runs."""
+    import subprocess
+
+    from c_build import gprbuild
+
+    generate(ROOT / "examples/submarine/submarine.rcs", "ada", tmp_path, "--exclude-simulators")
+    assert not list(tmp_path.glob("submarine_0_ctrl_0_*sim*"))
+    assert "this file is yours" in (tmp_path / "submarine_io.c").read_text(encoding="utf-8").lower()
+    gprbuild(tmp_path, "-O0", tmp_path / "prog")
+    run = subprocess.run([str(tmp_path / "prog"), "--fast", "--no-console", "--no-timing", "--cycles", "3", "--trace", "-"],
+                         capture_output=True, text=True, timeout=60, stdin=subprocess.DEVNULL)
+    assert run.returncode == 0 and len(run.stdout.splitlines()) == 3, run.stderr
+    assert '"TURBINE_SIM"' not in run.stdout and '"PR"' in run.stdout
+
+
+def test_ada_comments_are_one_printable_line() -> None:
+    from rcsc.backends.ada import ada_comment
+
+    assert ada_comment("x > 1 // why\n   and\ty\r") == "x > 1 // why and y"
+    assert ada_comment("é ∑ \x00 ok") == "? ? ? ok"
