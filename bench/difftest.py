@@ -1,4 +1,4 @@
-"""The differential tester: random designs through the simulator, C and Rust, traces compared.
+"""The differential tester: random designs through the simulator, C, Rust and Ada, traces compared.
 
     python bench/difftest.py --seeds 0..99
     python bench/difftest.py --seeds 0..49 --targets c --jobs 2
@@ -8,7 +8,7 @@
 For every seed, bench/difftest_gen.py draws a design that checks clean and a
 scenario for it; bench/difftest_run.py runs the scenario in the reference
 simulator and in every build (C: gcc -O0, gcc -O2, clang -O2, clang with
-ASan+UBSan; Rust: debug and release, plus clippy -D warnings) and compares the
+ASan+UBSan; Rust: debug and release, plus clippy -D warnings; Ada: gprbuild -O0/-O2) and compares the
 traces byte for byte.  Seeds go in batches (`--batch`, one cargo workspace per
 batch).  It prints the figures (designs per minute, disagreements, warnings,
 failures) and writes each failing seed's design, scenario and findings to the
@@ -53,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", default="0..9", help="A..B, both included")
     ap.add_argument("--hostile-names", action="store_true", help="names that are C/Rust keywords, macros, colliding or long")
     ap.add_argument("--jobs", type=int, default=1)
-    ap.add_argument("--targets", default="c,rust")
+    ap.add_argument("--targets", default="c,rust,ada")
     ap.add_argument("--batch", type=int, default=10, help="seeds per cargo workspace")
     ap.add_argument("--out", default="difftest-repros", help="folder for the repros of failing seeds")
     ap.add_argument("--max-seconds", type=float, default=0.0,

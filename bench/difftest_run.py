@@ -5,7 +5,8 @@ simulator in process, builds the C target with gcc -O0, gcc -O2, clang -O2
 and clang with AddressSanitizer and UndefinedBehaviorSanitizer (one compiler
 invocation per build, the project's strict warning flags), and the Rust
 target as one cargo workspace for the whole batch (debug, release and
-`cargo clippy -- -D warnings`, one shared target folder), runs every Main
+`cargo clippy -- -D warnings`, one shared target folder), the Ada target
+with gprbuild at -O0 and -O2 (-gnatwa -gnatwe -gnata -gnato), runs every Main
 Program on the case's scenario and compares its trace with the simulator's
 byte for byte.  Every difference, every compiler or clippy message, every
 exit code other than 0 and every line a program prints on stderr (a sanitizer
@@ -36,6 +37,8 @@ C_CONFIGS = {
                                    "-fno-omit-frame-pointer"]),
 }
 RUST_CONFIGS = ("rust-debug", "rust-release")
+# The Ada target: the generated GNAT project (-gnatwa -gnatwe -gnata -gnato) at two levels.
+ADA_CONFIGS = {"ada-O0": "-O0", "ada-O2": "-O2"}
 # Cargo's own note that the members' [profile] tables are not read in a
 # workspace: the workspace root carries the same tables (checked below).
 _PROFILE_NOTE = re.compile(r"^warning: profiles for the non root package will be ignored.*\n(^(package|workspace):.*\n)*", re.M)
@@ -164,6 +167,30 @@ def c_case(p: Prepared, configs: list[str]) -> list[Finding]:
     return out
 
 
+def ada_generate(p: Prepared) -> list[Finding]:
+    """`rcsc build --target ada` of one case (in the main thread: it redirects stderr)."""
+    rc, err = _rcsc(["build", str(p.design), "--target", "ada", "-o", str(p.folder / "ada")])
+    return [] if rc == 0 else [Finding(p.case.seed, "crash", "rcsc build ada", err[-3000:])]
+
+
+def ada_case(p: Prepared) -> list[Finding]:
+    """Build each Ada configuration of a generated case with gprbuild and run it."""
+    src = p.folder / "ada"
+    out = []
+    for config, opt in ADA_CONFIGS.items():
+        proc = subprocess.run(["gprbuild", "-q", "-P", "rcs_build.gpr", f"-XRCS_OPT={opt}"], cwd=src, capture_output=True, text=True)
+        text = proc.stdout + proc.stderr
+        if proc.returncode != 0 or "warning" in text:
+            out.append(Finding(p.case.seed, "warning" if "warning" in text else "fail", config, text[-4000:]))
+            continue
+        (main,) = re.findall(r'for Executable \("[^"]+"\) use "([^"]+)";', (src / "rcs_build.gpr").read_text(encoding="utf-8"))
+        exe = p.folder / f"{config}.bin"
+        exe.write_bytes((src / main).read_bytes())
+        exe.chmod(0o755)
+        out += run_program(p, exe, config)
+    return out
+
+
 def _profiles(toml: str) -> str:
     return toml[toml.index("[profile."):] if "[profile." in toml else ""
 
@@ -260,12 +287,19 @@ def run_batch(cases: list[Case], targets: list[str], jobs: int = 1, c_configs: l
                 findings += got
                 if not got:
                     c_ready.append(p)
+        ada_ready = []
+        if "ada" in targets:
+            for p in good:
+                got = ada_generate(p)
+                findings += got
+                if not got:
+                    ada_ready.append(p)
         rust_ready = []
         if "rust" in targets and good:
             rust_ready, got = rust_generate(good, base)
             findings += got
         with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
-            futures = [pool.submit(c_case, p, configs) for p in c_ready]
+            futures = [pool.submit(c_case, p, configs) for p in c_ready] + [pool.submit(ada_case, p) for p in ada_ready]
             if rust_ready:
                 findings += rust_batch(rust_ready, base, jobs, rust_steps)
             for fut in futures:

@@ -519,13 +519,15 @@ def _run_console(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------------
 
 def _add_test_arguments(p: argparse.ArgumentParser) -> None:
+    from rcsc.outputs import backend
+
     p.add_argument("paths", metavar="PATH", nargs="*", default=["."], help="design files, scenario files or folders (default: .)")
     p.add_argument("--junit", metavar="FILE", help="also write a JUnit XML report to FILE")
     p.add_argument(
-        "--target", choices=("sim", "c", "rust"), default="sim",
+        "--target", choices=("sim", *backend.target_names()), default="sim",
         help="run the scenarios in the simulator (default) or on the compiled Main Program (built once, see docs/events.md)",
     )
-    p.add_argument("--build-dir", metavar="DIR", default="build/rcsc-test", help="where --target c|rust builds the design (default: build/rcsc-test)")
+    p.add_argument("--build-dir", metavar="DIR", default="build/rcsc-test", help="where --target c|rust|ada builds the design (default: build/rcsc-test)")
 
 
 def _run_test(args: argparse.Namespace) -> int:

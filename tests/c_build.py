@@ -41,6 +41,21 @@ C_CONFIGS = {
 }
 
 
+# Ada (GNAT, gprbuild): the generated project builds with -gnatwa -gnatwe -gnata -gnato; RCS_OPT sets -O.
+ADA_OPTS = ("-O0", "-O2")
+
+
+def gprbuild(src: Path, opt: str, exe: Path) -> None:
+    """`gprbuild -P rcs_build.gpr -XRCS_OPT=OPT` in a generated Ada folder (asserts no error and no
+    warning: the project makes every warning an error); copies its single Main Program to `exe`."""
+    proc = subprocess.run(["gprbuild", "-q", "-P", "rcs_build.gpr", f"-XRCS_OPT={opt}"], cwd=src, capture_output=True, text=True)
+    assert proc.returncode == 0, f"gprbuild {opt} failed on {src}:\n{proc.stdout[-3000:]}{proc.stderr[-3000:]}"
+    assert "warning" not in proc.stdout + proc.stderr, proc.stdout + proc.stderr
+    (main,) = re.findall(r'for Executable \("[^"]+"\) use "([^"]+)";', (src / "rcs_build.gpr").read_text(encoding="utf-8"))
+    exe.write_bytes((src / main).read_bytes())
+    exe.chmod(0o755)
+
+
 # Both with overflow-checks = true (the generated Cargo.toml sets it in every profile).
 RUST_PROFILES = ("debug", "release")
 
@@ -157,6 +172,14 @@ class Builds:
             src = self.source(design, "c")
             exe = self.base / f"c-{design.stem}-{config}.bin"
             compile_c(src, cc, flags, exe)
+            self.binaries[key] = exe
+        return self.binaries[key]
+
+    def ada_binary(self, design: Path, opt: str) -> Path:
+        key = (design, f"ada{opt}")
+        if key not in self.binaries:
+            exe = self.base / f"ada-{design.stem}{opt}.bin"
+            gprbuild(self.source(design, "ada"), opt, exe)
             self.binaries[key] = exe
         return self.binaries[key]
 

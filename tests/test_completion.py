@@ -41,7 +41,7 @@ def test_bash_completes_commands_options_choices_codes_and_files(tmp_path, capsy
     assert _bash_complete(script, ["rcsc", "check", "--form"], tmp_path) == ["--format"]
     assert _bash_complete(script, ["rcsc", "check", "--format", "s"], tmp_path) == ["short", "sarif"]
     assert _bash_complete(script, ["rcsc", "explain", "E050"], tmp_path) == sorted(c for c in CODES if c.startswith("E050"))
-    assert _bash_complete(script, ["rcsc", "build", "x", "--target", ""], tmp_path) == ["c", "rust"]
+    assert _bash_complete(script, ["rcsc", "build", "x", "--target", ""], tmp_path) == ["ada", "c", "rust"]
     (tmp_path / "ship.rcs").write_text("design ship\n")
     assert _bash_complete(script, ["rcsc", "check", "sh"], tmp_path) == ["ship.rcs"]
     assert _bash_complete(script, ["rcsc", "check", "--select", ""], tmp_path) == []

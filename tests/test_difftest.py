@@ -117,6 +117,15 @@ def test_hostile_slice_agrees_everywhere(tmp_path: Path) -> None:
     assert findings == [], "\n\n".join(f"{f.line()}\n{f.detail}" for f in findings)
 
 
+def test_ada_agrees_on_a_slice_and_hostile_names(tmp_path: Path) -> None:
+    """The Ada target (gprbuild -O0 and -O2, every warning an error, run-time
+    checks on) on part of the slice and two hostile-name seeds: every trace
+    equals the simulator's, no GNAT message, no exception."""
+    cases = [generate(s) for s in SLICE[:3]] + [generate(s, hostile=True) for s in HOSTILE_SLICE[:2]]
+    findings = run_batch(cases, ["ada"], jobs=1, workdir=tmp_path)
+    assert findings == [], "\n\n".join(f"{f.line()}\n{f.detail}" for f in findings)
+
+
 def test_the_generator_draws_untyped_if_literals_and_externs() -> None:
     """`i32(if c then u32(1) else u32(4294967295))` (constants whose type only
     the context gives, once mistyped by the Rust target) and extern functions,

@@ -66,7 +66,8 @@ def test_installed_wheel_checks_a_design_from_another_folder(tmp_path: Path) -> 
     assert "rcsc/backends/c/templates/ctrl.c.j2" in names
     assert "rcsc/backends/c/runtime/rcs_runtime.c" in names
     result = subprocess.run([str(venv / "bin" / "rcsc"), "targets"], cwd=work, env=env, capture_output=True, text=True)
-    assert result.returncode == 0 and result.stdout.split()[0] == "c", result.stdout + result.stderr
+    assert result.returncode == 0 and [x.split()[0] for x in result.stdout.splitlines()] == ["ada", "c", "rust"], result.stdout + result.stderr
+    assert "rcsc/backends/ada/runtime/rcs_num.ads" in names and "rcsc/backends/ada/templates/ctrl.adb.j2" in names
     result = subprocess.run(
         [str(venv / "bin" / "rcsc"), "build", "submarine.rcs", "--target", "c", "-o", "out"], cwd=work, env=env, capture_output=True, text=True
     )

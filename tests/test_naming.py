@@ -29,11 +29,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from c_build import Builds, cargo_build, compile_c, first_difference, generate, reference_trace, run_main
+from c_build import Builds, cargo_build, compile_c, first_difference, generate, gprbuild, reference_trace, run_main
 from rcsc.outputs import naming as nm
 from rcsc.backends.c import headers
 from rcsc.backends.c.naming import C_KEYWORDS, HEADER_NAMES, CNames
 from rcsc.backends.rust.naming import RESERVED, RUST_KEYWORDS, RustNames
+from rcsc.backends.ada.naming import ADA_KEYWORDS, FIXED as ADA_FIXED, AdaNames
 
 C_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 ROOT = Path(__file__).resolve().parent.parent
@@ -223,6 +224,59 @@ def test_rust_names_never_meet(d: dict) -> None:
     assert len({x.casefold() for x in modules}) == len(modules)
 
 
+# ---- Ada ----------------------------------------------------------------------------------------
+
+ADA_IDENT = re.compile(r"[A-Za-z](?:_?[A-Za-z0-9])*\Z")
+
+
+def _all_names(d: dict) -> list[str]:
+    keys = ("types", "consts", "fns", "ctrls", "cpus", "members", "verbs", "statuses", "states", "labels", "fields")
+    return [d["design"]] + [x for k in keys for x in d[k]]
+
+
+@settings(max_examples=150, deadline=None)
+@given(designs())
+def test_ada_names_never_meet(d: dict) -> None:
+    """Ada ignores case: every scope must stay apart under casefold, and every name be an Ada identifier."""
+    n = AdaNames(d["design"], _all_names(d))
+    scope = [n.type(t) for t in d["types"]] + [n.const(k) for k in d["consts"]] + [n.function(f) for f in d["fns"]]
+    scope += [n.enum_member(t, x) for t in d["types"] for x in d["members"]] + [n.period(c) for c in d["cpus"]]
+    for c in d["ctrls"]:
+        scope += [n.ctrl_part(c, tag) for tag in ("Args", "Cmd_Buffer", "Fields", "Status_Buffer")]
+        scope += [n.verb(c, v) for v in d["verbs"]] + [n.status(c, s) for s in d["statuses"]] + [n.verb_args(c, v) for v in d["verbs"]]
+    scope += ["Buffers", "Gm_Record", "Gm_Stamps", "Buf", "Buf_Size"]
+    body = [n.state(s) for s in ["", "new", "done", "error", *d["states"]]]
+    body += [n.rule(v, x) for v in d["verbs"] for x in d["labels"]] + [n.plan_fn(v) for v in d["verbs"]]
+    body += ["Init", "Step", "Plan", "Entry_Cycle", "Loc", "Sent", "Send", "State", "Cycle", "Budget_Ns"]
+    units = [n.package(k) for k in ("Types", "Functions", "Externs")] + [n.ctrl_package(c) for c in d["ctrls"]]
+    units += [n.main_unit(c) for c in d["cpus"]] + ["Rcs_Num"]
+    keywords = {k.casefold() for k in ADA_KEYWORDS}
+    for group in (scope, body, units):
+        folded = [x.casefold() for x in group]
+        assert len(set(folded)) == len(folded), sorted(x for x in group if folded.count(x.casefold()) > 1)
+        for x in group:
+            assert ADA_IDENT.match(x) and len(x) <= 120 and x.casefold() not in keywords, x
+    # Components and parameters: apart under casefold, Ada identifiers, never a
+    # design-wide name, a keyword or a name of Standard, Interfaces or the templates.
+    uniq = sorted(set(d["fields"] + d["members"] + d["verbs"]))
+    members = [n.member(x) for x in uniq]
+    assert len({x.casefold() for x in members}) == len(uniq)
+    fixed = {x.casefold() for x in ADA_FIXED} | keywords | {x.casefold() for x in scope + body}
+    for x in members:
+        assert ADA_IDENT.match(x) and len(x) <= 120 and x.casefold() not in fixed, x
+    assert n.member("Foo") != n.member("foo") if {"Foo", "foo"} <= set(uniq) else True
+
+
+def test_ada_names_of_the_hostile_list() -> None:
+    n = AdaNames("d", ["Foo", "foo", "_", "a__b", "x_", "type", "Integer_32", "X0", "a_0"])
+    assert n.member("Foo") == "X0466f6f" and n.member("foo") == "X0666f6f"
+    assert [n.member(x) for x in ("_", "a__b", "x_", "type", "Integer_32", "a_0")] == [
+        "X05f", "X0615f5f62", "X0785f", "X074797065", "X0496e74656765725f3332", "X0615f30"]
+    assert n.member("X0") == "X05830" and n.member("MAX_RPM") == "MAX_RPM"
+    assert n.enum_member("Ea_B", "C") == "M_0_Ea_B_0_C" != n.enum_member("Ea", "B_C")
+    assert n.main_unit("MAIN") == "d_0_Main_0_MAIN"
+
+
 # ---- the C headers -------------------------------------------------------------------------------
 
 
@@ -340,6 +394,23 @@ def test_hostile_design_in_c_equals_the_simulator(seed: int, tmp_path: Path) -> 
     generate(design, "c", out, "--deny-warnings")
     exe = tmp_path / "prog"
     compile_c(out, "gcc", ["-O0"], exe)
+    trace = tmp_path / "trace.jsonl"
+    proc = run_main(exe, design, scn, trace)
+    assert proc.returncode == 0, proc.stderr
+    expected = reference_trace(design, scn)
+    assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_hostile_design_in_ada_equals_the_simulator(seed: int, tmp_path: Path) -> None:
+    """Ada ignores case and takes no `_` at either end of a name: the names of
+    the hostile designs (`Foo` beside `foo`, `_`, `a__b`, keywords) still build
+    warning-free and run as in the simulator."""
+    design, scn = _write(tmp_path, seed)
+    out = tmp_path / "ada"
+    generate(design, "ada", out, "--deny-warnings")
+    exe = tmp_path / "prog"
+    gprbuild(out, "-O0", exe)
     trace = tmp_path / "trace.jsonl"
     proc = run_main(exe, design, scn, trace)
     assert proc.returncode == 0, proc.stderr

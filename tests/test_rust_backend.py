@@ -364,12 +364,12 @@ def test_rule_layouts_build_clean_and_conform(builds: Builds, tmp_path: Path) ->
     assert c == expected, first_difference(expected, c)
 
 
-def test_targets_lists_c_and_rust(capsys) -> None:
+def test_targets_lists_every_target(capsys) -> None:
     from rcsc import cli
 
     assert cli.main(["targets"]) == 0
     names = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
-    assert names == ["c", "rust"]
+    assert names == ["ada", "c", "rust"]
 
 
 # ---- the layout engine against rustfmt itself ----------------------------------------------

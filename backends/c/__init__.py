@@ -8,6 +8,8 @@ is copied from runtime/.  See docs/backends.md.
 
 from __future__ import annotations
 
+import os
+
 from rcsc.semantics import model as m
 from rcsc.outputs.backend import (
     OutFile,
@@ -76,6 +78,13 @@ class CBackend(CTarget):
         files.append(OutFile("Makefile", self.render("Makefile.j2", **build)))
         files.append(OutFile("CMakeLists.txt", self.render("CMakeLists.txt.j2", **build)))
         return files
+
+    def build_commands(self, folder: str) -> list[tuple[list[str], dict[str, str] | None]]:
+        return [(["make", "-s"], None)]
+
+    def program(self, folder: str) -> str:
+        d, n = self.design, self.n
+        return os.path.join(folder, f"run_{n.p}" if len(d.cpus) > 1 else n.binary(next(iter(d.cpus))))
 
     def common_names(self) -> dict:
         """The design-wide names every file of the design uses."""

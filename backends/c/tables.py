@@ -31,7 +31,9 @@ def _fields(tg: CTarget, struct: str, items: list[tuple[str, Type]]) -> list[str
     return [f"{{{c_string(n)}, offsetof({struct}, {tg.ident(n)}), {type_ref(tg, t)}}}," for n, t in items]
 
 
-def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: list[m.Controller]) -> dict:
+def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: list[m.Controller], buf: str = "buf") -> dict:
+    """The tables of one CPU's Main Program; `buf` names the buffers object they point into
+    (another target's Main Program may own it under another name)."""
     d, n = tg.design, tg.n
     types = []
     for t in ordered_types(d):
@@ -102,13 +104,13 @@ def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: li
             "1" if c.simulator else "0",
             f"INT64_C({c.budget_ns})",
             n.local("step", c.name),
-            f"&buf.{cmd}.head",
-            f"&buf.{cmd}.args" if has_args else "NULL",
-            f"sizeof buf.{cmd}.args" if has_args else "0u",
+            f"&{buf}.{cmd}.head",
+            f"&{buf}.{cmd}.args" if has_args else "NULL",
+            f"sizeof {buf}.{cmd}.args" if has_args else "0u",
             verbs if verb_rows else "NULL",
             f"{len(verb_rows)}u",
-            f"&buf.{status}.head",
-            f"&buf.{status}.f" if c.status_fields else "NULL",
+            f"&{buf}.{status}.head",
+            f"&{buf}.{status}.f" if c.status_fields else "NULL",
             status_fields if c.status_fields else "NULL",
             f"{len(c.status_fields)}u",
             states,

@@ -64,6 +64,7 @@ class CTarget(Target):
     summary = "C99 controllers (freestanding) and a POSIX Main Program per CPU"
     package = "rcsc.backends.c"
     multi_cpu = True
+    multi_rate = True
 
     def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
         super().__init__(design, options)

@@ -20,6 +20,8 @@ docs/backends.md.
 
 from __future__ import annotations
 
+import os
+
 from importlib import resources
 
 from rcsc.semantics import model as m
@@ -74,6 +76,15 @@ EXPR_ALLOWS = [
 class RustBackend(RustTarget):
     entry_files = ("Cargo.toml",)
     transports = ("shm", "dds")
+
+    def build_commands(self, folder: str) -> list[tuple[list[str], dict[str, str] | None]]:
+        return [(["cargo", "build", "--offline", "--release", "--quiet"],
+                 {"CARGO_TARGET_DIR": os.path.join(folder, "target"), "CARGO_TERM_COLOR": "never"})]
+
+    def program(self, folder: str) -> str:
+        d = self.design
+        name = f"run_{self.crate}" if len(d.cpus) > 1 else self.n.binary(next(iter(d.cpus)))
+        return os.path.join(folder, "target", "release", name)
 
     def files(self) -> list[OutFile]:
         from rcsc.backends.rust.tables import main_program

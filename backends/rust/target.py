@@ -87,6 +87,7 @@ class RustTarget(Target):
     summary = "Rust crate: a no_std, unsafe-free controller library and a std Main Program per CPU"
     package = "rcsc.backends.rust"
     multi_cpu = True
+    multi_rate = True
 
     def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
         super().__init__(design, options)

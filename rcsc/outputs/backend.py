@@ -42,6 +42,7 @@ _REGISTRY: dict[str, str] = {
     # name -> module that defines the target class (imported on first use)
     "c": "rcsc.backends.c",
     "rust": "rcsc.backends.rust",
+    "ada": "rcsc.backends.ada",
 }
 _LOADED: dict[str, type["Target"]] = {}
 
@@ -51,6 +52,11 @@ def register(cls: type["Target"]) -> type["Target"]:
     _LOADED[cls.name] = cls
     _REGISTRY.setdefault(cls.name, cls.__module__)
     return cls
+
+
+def target_names() -> list[str]:
+    """The registered targets' names, sorted, without importing them."""
+    return sorted(_REGISTRY)
 
 
 def targets() -> list[type["Target"]]:
@@ -386,6 +392,9 @@ class Target:
     # Builds several CPUs (a transport between their processes), divided
     # rates and Global Memory stamps; a target without them refuses such designs.
     multi_cpu = False
+    # Steps controllers at divided rates on one CPU (`period`) and keeps the
+    # stamps of Global Memory for `age(V)`; a target with several CPUs does.
+    multi_rate = False
     # The transports (BuildOptions.transport) this target can generate.
     transports: tuple[str, ...] = ("shm",)
     MAX_CPUS = 64  # the transport keeps one bit per reading CPU in a 64-bit word
@@ -421,6 +430,8 @@ class Target:
                 "second CPU",
             )
             d.with_label(cpus[0].name_span, "first CPU")
+        if self.multi_rate:
+            return
         for c in self.design.controllers.values():
             if c.divider > 1:
                 diags.add("E0800", c.period_span or c.name_span, f"the {self.name} target steps every controller every cycle; `{c.name}` has a period", "divided rate")
@@ -459,6 +470,18 @@ class Target:
     # ---- output --------------------------------------------------------------------
 
     def files(self) -> list[OutFile]:
+        raise NotImplementedError
+
+    # ---- compiling a written build (`rcsc test --target NAME`) -------------------------
+
+    def build_commands(self, folder: str) -> list[tuple[list[str], dict[str, str] | None]]:
+        """The commands that compile the files of `files()` once written to `folder`:
+        (argv, extra environment or None), run in `folder` in order."""
+        raise NotImplementedError
+
+    def program(self, folder: str) -> str:
+        """The program those commands make that runs the design: the Main Program of a
+        single-CPU design, the launcher of a design with several CPUs."""
         raise NotImplementedError
 
     def render(self, template: str, **context) -> str:

@@ -1,4 +1,4 @@
-"""`rcsc test --target c|rust`: scenarios run on the compiled Main Program (`run_compiled`).
+"""`rcsc test --target NAME`: scenarios run on the compiled Main Program (`run_compiled`).
 
 The design is built once per content (a folder under the build directory
 named by the hash of the generated files and the rcsc version, reused while
@@ -14,7 +14,6 @@ import hashlib
 import json
 import os
 import subprocess
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,7 +27,6 @@ from rcsc.semantics.types import FloatType, RecordType, Type
 from rcsc.sim.runner import RunResult, evaluate_expectation
 from rcsc.sim.trace import CtrlSnapshot, Snapshot
 
-TARGETS = ("c", "rust")
 RUN_TIMEOUT = 600.0
 
 
@@ -72,13 +70,7 @@ def build(design: m.Design, target_name: str, build_root: str) -> Build:
     files = tg.files()
     folder = Path(build_root) / f"{design.name}-{target_name}-{_key(target_name, files)}"
     multi = len(design.cpus) > 1
-    if target_name == "c":
-        n = tg.n
-        program = folder / (f"run_{n.p}" if multi else n.binary(next(iter(design.cpus))))
-    else:
-        bins = [b["name"] for b in tomllib.loads(next(f.text for f in files if f.path == "Cargo.toml"))["bin"]]
-        name = next(b for b in bins if b.startswith("run_")) if multi else bins[0]
-        program = folder / "target" / "release" / name
+    program = Path(tg.program(str(folder)))
     done = folder / ".rcsc-built"
     if done.is_file() and program.is_file():
         return Build(folder, program, multi)
@@ -86,11 +78,8 @@ def build(design: m.Design, target_name: str, build_root: str) -> Build:
         backend.write_files(files, str(folder), tg.entry_files)
     except OSError as exc:
         raise CompiledError(f"cannot write the build to {folder}: {exc.strerror or exc}") from exc
-    if target_name == "c":
-        _run_tool(["make", "-s"], folder)
-    else:
-        env = dict(os.environ, CARGO_TARGET_DIR=str(folder / "target"), CARGO_TERM_COLOR="never")
-        _run_tool(["cargo", "build", "--offline", "--release", "--quiet"], folder, env)
+    for cmd, env in tg.build_commands(str(folder)):
+        _run_tool(cmd, folder, dict(os.environ, **env) if env else None)
     if not program.is_file():
         raise CompiledError(f"the build did not make {program}")
     done.write_text(f"{program.name}\n", encoding="utf-8")
