@@ -309,6 +309,12 @@ def test_the_program_refuses_bad_requests_with_a_reason(builds: Builds, target: 
             why = seg.request("events\nrcsc-events 1 submarine 0000000000000000\ncycles 1\nend 0\n")
             assert why is not None and "<console>:1: error: the event file is for design `submarine` (interface 0000000000000000)" in why
             assert seg.request("mode 2 pause") is None and seg.snapshot().rows[2]["mode"] == 1
+            # E0815: a request larger than the ring's text area is refused before it is sent.
+            from rcsc.sim.console import ConsoleError
+
+            with pytest.raises(ConsoleError) as err:
+                seg.request("x" * (1 << 22))
+            assert err.value.code == "E0815" and "too long" in str(err.value)
         finally:
             seg.close()
 
