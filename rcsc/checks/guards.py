@@ -129,7 +129,7 @@ from rcsc.checks.smt import (
 from rcsc.front.source import Span
 from rcsc.checks.smt import _and as _z3_and
 from rcsc.checks.smt import _rational as _rational_of
-from rcsc.checks.smt import real_of
+from rcsc.checks.smt import neg, real_of
 from rcsc.semantics.types import DURATION, EnumType, FloatType, RecordType, Type
 
 # The budget of one solver query.  The resource limit is deterministic (the
@@ -482,7 +482,7 @@ class _Analysis:
             if all(v.vec[i] == b for i, b in lits.items()):
                 self.st.reused += 1
                 return v
-        assumptions = [self.p[i] if b else z3.Not(self.p[i]) for i, b in lits.items()]
+        assumptions = [self.p[i] if b else neg(self.p[i]) for i, b in lits.items()]
         self.st.queries += 1
         r = self.solver.check(*assumptions)
         if r == z3.sat:
@@ -520,7 +520,7 @@ class _Analysis:
         return list(keys)
 
     def lits(self, lits: dict[int, bool]) -> list:
-        return [self.p[i] if b else z3.Not(self.p[i]) for i, b in lits.items()]
+        return [self.p[i] if b else neg(self.p[i]) for i, b in lits.items()]
 
     def witness(self, model, idxs, hard: list | None = None):
         """The values of the inputs of rules `idxs`, made readable first (see `polish`); and the model."""

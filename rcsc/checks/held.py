@@ -52,6 +52,7 @@ import z3
 
 from rcsc.semantics import model as m
 from rcsc.checks.guards import rule_vector
+from rcsc.checks.smt import neg
 from rcsc.checks.plans import DONE, ERROR, failure_of, rule_target
 
 MAX_CONTEXTS = 32  # per state
@@ -204,7 +205,7 @@ class Held:
         for s, vals in allowed.items():
             for i in range(len(self.members[s])):
                 if i not in vals:
-                    assumptions.append(z3.Not(self.literal(s, i)))
+                    assumptions.append(neg(self.literal(s, i)))
         an.st.queries += 1
         r = an.solver.check(*assumptions)
         if r == z3.unknown:
