@@ -129,7 +129,7 @@ from rcsc.checks.smt import (
 from rcsc.front.source import Span
 from rcsc.checks.smt import _and as _z3_and
 from rcsc.checks.smt import _rational as _rational_of
-from rcsc.checks.smt import real_of
+from rcsc.checks.smt import neg, real_of
 from rcsc.semantics.types import DURATION, EnumType, FloatType, RecordType, Type
 
 # The budget of one solver query.  The resource limit is deterministic (the
@@ -403,6 +403,26 @@ class _Finding:
     span: Span | None = None
 
 
+def rule_vector(model, p: dict) -> dict[int, bool]:
+    """Which rules' conditions hold in `model` (`p`: rule index -> its Boolean).
+
+    The same as `z3.is_true(model.eval(b, model_completion=True))` for each,
+    through z3's C API directly: for a Boolean constant the evaluation gives
+    z3's own `true` or `false`, so no term is made, kept or freed (the
+    solver's later answers, which can depend on the terms made before them,
+    are the same), only the Python wrappers are saved.
+    """
+    ctx = model.ctx.ref()
+    mod = model.model
+    r = (z3.Ast * 1)()
+    out = {}
+    for i, b in p.items():
+        if not z3.Z3_model_eval(ctx, mod, b.as_ast(), True, r):
+            raise z3.Z3Exception("failed to evaluate expression in the model")
+        out[i] = z3.Z3_get_bool_value(ctx, r[0]) == z3.Z3_L_TRUE
+    return out
+
+
 class _Sat:
     def __init__(self, model, vec) -> None:
         self.model = model
@@ -464,12 +484,12 @@ class _Analysis:
             if all(v.vec[i] == b for i, b in lits.items()):
                 self.st.reused += 1
                 return v
-        assumptions = [self.p[i] if b else z3.Not(self.p[i]) for i, b in lits.items()]
+        assumptions = [self.p[i] if b else neg(self.p[i]) for i, b in lits.items()]
         self.st.queries += 1
         r = self.solver.check(*assumptions)
         if r == z3.sat:
             model = self.solver.model()
-            vec = {i: z3.is_true(model.eval(p, model_completion=True)) for i, p in self.p.items()}
+            vec = rule_vector(model, self.p)
             res = _Sat(model, vec)
             self.vectors.append(res)
             return res
@@ -502,7 +522,7 @@ class _Analysis:
         return list(keys)
 
     def lits(self, lits: dict[int, bool]) -> list:
-        return [self.p[i] if b else z3.Not(self.p[i]) for i, b in lits.items()]
+        return [self.p[i] if b else neg(self.p[i]) for i, b in lits.items()]
 
     def witness(self, model, idxs, hard: list | None = None):
         """The values of the inputs of rules `idxs`, made readable first (see `polish`); and the model."""
@@ -891,7 +911,7 @@ class _Analysis:
             fixed = [k for i in remaining for k in self.encs[i].inputs if k[0] != "view" and _is_fixed(k, self.c, self.assigned)]
             if remaining and not fixed:
                 pinned = {k[1]: v for k, v in zip(keys, combo)}
-                if any(all(vs[x] == v for x, v in pinned.items()) and any(vec.get(i) for i in remaining) for vec, vs in h.models):
+                if any(any(e[0].get(i) for i in remaining) and all(h.views_of(e)[x] == v for x, v in pinned.items()) for e in h.models):
                     self.st.reused += 1
                     continue
                 self.solver.push()
@@ -1075,20 +1095,22 @@ class _Canon:
 
     def commands(self, r: m.Rule) -> tuple:
         """The rule's commands as the held-status analysis sees them: which subordinate, always or in an `if`, can it fail."""
+        if not r.jobs:
+            return ()
         from rcsc.checks.held import commands
         from rcsc.checks.plans import failure_of
 
-        if not r.jobs:
-            return ()
         top, nested = commands(r)
         out = []
-        for cmd in top + nested:
-            if cmd.sub not in self.design.controllers:
+        controllers = self.design.controllers
+        for n, cmd in enumerate(top + nested):
+            if cmd.sub not in controllers:
                 continue
             key = (cmd.sub, cmd.verb)
             if key not in self.fails:
                 self.fails[key] = failure_of(self.design, cmd.sub, cmd.verb) is not None
-            out.append((self.key_of(("view", cmd.sub)), cmd in nested, self.fails[key]))
+            # `nested` holds no command equal to one of `top` (`held.commands`).
+            out.append((self.key_of(("view", cmd.sub)), n >= len(top), self.fails[key]))
         return tuple(out)
 
     def key_of(self, key: tuple) -> int:
@@ -1123,12 +1145,15 @@ class _Canon:
 
     def expr(self, e: m.Expr, in_fn: bool = False):
         t = type(e)
-        if t is m.Const:
-            return ("c", str(e.type), _vkey(e.value))
+        # The common kinds first (the text is computed for every plan, cached or not).
+        if t is m.Binary:
+            return ("b", e.op, str(e.type), str(e.left.type), self.expr(e.left), self.expr(e.right))
         if t is m.Ref:
             if e.kind == "arg":
                 return ("arg", e.name)
-            return ("v", self.key_of((e.kind, e.name)), tuple())
+            return ("v", self.key_of((e.kind, e.name)), ())
+        if t is m.Const:
+            return ("c", str(e.type), _vkey(e.value))
         if t is m.InState:
             return ("v", self.key_of(("in_state",)))
         if t is m.Cycle:
@@ -1149,8 +1174,6 @@ class _Canon:
             return ("call", e.kind, e.func, str(e.type), tuple(self.expr(a) for a in e.args))
         if t is m.Unary:
             return ("u", e.op, str(e.type), self.expr(e.operand))
-        if t is m.Binary:
-            return ("b", e.op, str(e.type), str(e.left.type), self.expr(e.left), self.expr(e.right))
         if t is m.IfExpr:
             return ("if", str(e.type), self.expr(e.cond), self.expr(e.then), self.expr(e.else_))
         return ("?", t.__name__)

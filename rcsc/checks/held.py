@@ -51,6 +51,8 @@ from dataclasses import dataclass, field
 import z3
 
 from rcsc.semantics import model as m
+from rcsc.checks.guards import rule_vector
+from rcsc.checks.smt import neg
 from rcsc.checks.plans import DONE, ERROR, failure_of, rule_target
 
 MAX_CONTEXTS = 32  # per state
@@ -95,7 +97,10 @@ class Graph:
 def commands(rule: m.Rule) -> tuple[list[m.Command], list[m.Command]]:
     """The rule's commands: those always sent, and those sent only in some branch of an `if`."""
     top = [j for j in rule.jobs if isinstance(j, m.Command)]
-    nested = [j for j in m.walk_stmts(rule.jobs) if isinstance(j, m.Command) and j not in top]
+    every = list(m.walk_stmts(rule.jobs))
+    if len(every) == len(rule.jobs):
+        return top, []  # no nested statements: every command is a top one
+    nested = [j for j in every if isinstance(j, m.Command) and j not in top]
     return top, nested
 
 
@@ -109,7 +114,7 @@ class Held:
         self.view = {s: an.enc.inputs[("view", s)].term for s in self.subs}
         self.lit: dict[tuple[str, int], z3.BoolRef] = {}  # made when a question first pins a view
         self.fail: dict[tuple[str, str | None], bool] = {}
-        self.models: list[tuple[dict, dict]] = []  # (rule vector, view values) of each model found
+        self.models: list[list] = []  # [rule vector, view values (None: not read yet), z3 model] of each model found
         self.memo: dict = {}
         self.seen = 0  # how many of the guard analysis's models are in `models`
 
@@ -160,6 +165,22 @@ class Held:
 
     # ---- questions ----
 
+    def pull(self) -> None:
+        """Take in the guard analysis's models found since the last call (views not read yet)."""
+        an = self.an
+        while self.seen < len(an.vectors):
+            v = an.vectors[self.seen]
+            self.seen += 1
+            self.models.append([v.vec, None, v.model])
+
+    def views_of(self, entry: list) -> dict:
+        """The subordinates' views in one model of `models` ([rule vector, views or None, z3 model])."""
+        if entry[1] is None:
+            model = entry[2]
+            entry[1] = {s: model.eval(self.view[s], model_completion=True).as_long() for s in self.subs}
+            entry[2] = None
+        return entry[1]
+
     def sat(self, lits: dict[int, bool], allowed: dict[str, frozenset[int]], what: str, span) -> dict | None:
         """The subordinates' views of an input where `lits` hold and each view is allowed (None: there is none)."""
         key = (tuple(sorted(lits.items())), tuple(sorted(allowed.items())))
@@ -169,21 +190,22 @@ class Held:
         if not allowed and key[0] in an.unsat:  # the guard analysis asked this already
             an.st.reused += 1
             return None
-        # The guard analysis's own models first (their views read lazily), then this analysis's.
-        while self.seen < len(an.vectors):
-            v = an.vectors[self.seen]
-            self.seen += 1
-            self.models.append((v.vec, {s: v.model.eval(self.view[s], model_completion=True).as_long() for s in self.subs}))
-        for vec, views in self.models:
-            if all(vec[i] == b for i, b in lits.items()) and all(views[s] in vals for s, vals in allowed.items()):
-                an.st.reused += 1
-                self.memo[key] = views
-                return views
+        # The guard analysis's own models first, then this analysis's; a
+        # model's views are read only when its rule vector matches.
+        self.pull()
+        for entry in self.models:
+            vec = entry[0]
+            if all(vec[i] == b for i, b in lits.items()):
+                views = self.views_of(entry)
+                if all(views[s] in vals for s, vals in allowed.items()):
+                    an.st.reused += 1
+                    self.memo[key] = views
+                    return views
         assumptions = an.lits(lits)
         for s, vals in allowed.items():
             for i in range(len(self.members[s])):
                 if i not in vals:
-                    assumptions.append(z3.Not(self.literal(s, i)))
+                    assumptions.append(neg(self.literal(s, i)))
         an.st.queries += 1
         r = an.solver.check(*assumptions)
         if r == z3.unknown:
@@ -191,9 +213,9 @@ class Held:
         found = None
         if r == z3.sat:
             model = an.solver.model()
-            vec = {i: z3.is_true(model.eval(p, model_completion=True)) for i, p in an.p.items()}
+            vec = rule_vector(model, an.p)
             found = {s: model.eval(self.view[s], model_completion=True).as_long() for s in self.subs}
-            self.models.append((vec, found))
+            self.models.append([vec, found, None])
         self.memo[key] = found
         return found
 

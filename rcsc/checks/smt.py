@@ -199,13 +199,35 @@ def _is_false(x) -> bool:
     return x.get_id() == _FALSE_ID
 
 
+def _mk_bool(mk, xs):
+    """`z3.And(*xs)` / `z3.Or(*xs)` of Boolean terms, without the Python API's coercions.
+
+    The same call of z3's C API makes the same term; only the checks and
+    casts of arguments that are Boolean terms already are skipped.
+    """
+    ctx = xs[0].ctx
+    if any(type(x) is not z3.BoolRef or x.ctx is not ctx for x in xs):
+        return (z3.And if mk is z3.Z3_mk_and else z3.Or)(*xs)
+    arr = (z3.Ast * len(xs))()
+    for i, x in enumerate(xs):
+        arr[i] = x.as_ast()
+    return z3.BoolRef(mk(ctx.ref(), len(xs), arr), ctx)
+
+
+def neg(x):
+    """`z3.Not(x)`: the same term, without the Python API's cast when `x` is a Boolean term already."""
+    if type(x) is z3.BoolRef:
+        return z3.BoolRef(z3.Z3_mk_not(x.ctx.ref(), x.as_ast()), x.ctx)
+    return z3.Not(x)
+
+
 def _or(*xs):
     xs = [x for x in xs if not _is_false(x)]
     if any(_is_true(x) for x in xs):
         return z3.BoolVal(True)
     if not xs:
         return z3.BoolVal(False)
-    return xs[0] if len(xs) == 1 else z3.Or(*xs)
+    return xs[0] if len(xs) == 1 else _mk_bool(z3.Z3_mk_or, xs)
 
 
 def _and(*xs):
@@ -214,7 +236,7 @@ def _and(*xs):
         return z3.BoolVal(False)
     if not xs:
         return z3.BoolVal(True)
-    return xs[0] if len(xs) == 1 else z3.And(*xs)
+    return xs[0] if len(xs) == 1 else _mk_bool(z3.Z3_mk_and, xs)
 
 
 def _ite(c, a, b):
@@ -230,7 +252,7 @@ def _not(x):
         return z3.BoolVal(False)
     if _is_false(x):
         return z3.BoolVal(True)
-    return z3.Not(x)
+    return neg(x)
 
 
 def rational(fr: Fraction) -> z3.RatNumRef:
