@@ -77,7 +77,7 @@ from fractions import Fraction
 import z3
 
 from rcsc.semantics import model as m
-from rcsc.semantics.types import BOOL, DURATION, I64, EnumType, ErrorType, FloatType, IntType, RecordType, Type
+from rcsc.semantics.types import BOOL, DURATION, I64, ArrayType, EnumType, ErrorType, FloatType, IntType, RecordType, Type
 
 VIEW_BASE = ("none", "executing", "done", "error")
 
@@ -712,6 +712,8 @@ def format_value(value, t: Type | None) -> str:
     if isinstance(value, dict) and isinstance(t, RecordType):
         inner = ", ".join(f"{n} = {format_value(value[n], ft)}" for n, ft in t.fields)
         return f"{t.name}({inner})"
+    if isinstance(value, list) and isinstance(t, ArrayType):
+        return "[" + ", ".join(format_value(v, t.elem) for v in value) + "]"
     return str(value)
 
 
@@ -723,4 +725,6 @@ def json_value(value, t: Type | None):
         return "NaN" if math.isnan(value) else ("inf" if value > 0 else "-inf")
     if isinstance(value, dict) and isinstance(t, RecordType):
         return {n: json_value(value[n], ft) for n, ft in t.fields}
+    if isinstance(value, list) and isinstance(t, ArrayType):
+        return [json_value(v, t.elem) for v in value]
     return value

@@ -333,6 +333,11 @@ class Checker:
     def e_ArrayRepeat(self, node: ast.ArrayRepeat, expected: Type | None) -> m.Expr:
         hint = expected.elem if isinstance(expected, ArrayType) else None
         value = self.fold(self.expr(node.value, hint))
+        if not isinstance(value, m.Const) and isinstance(value.type, (RecordType, ArrayType)):
+            try:  # a record built of constants (records are not folded)
+                value = m.Const(value.span, value.type, eval_expr(value, FoldEnv(self.g)))
+            except (NotConstant, TypeError, KeyError, ValueError, ArithmeticError):
+                pass
         n = self.array_length(node.count, "the count of `[value; count]`")
         if n is None or isinstance(value.type, ErrorType):
             return m.Const(node.span, ERROR, 0)
