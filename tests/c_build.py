@@ -75,6 +75,8 @@ def _examples() -> list[tuple[Path, Path]]:
     pairs.append((ROOT / "tests/edge/edge.rcs", ROOT / "tests/edge/edge.scn"))
     # Nothing optional: no Global Memory, types, constants or functions.
     pairs.append((ROOT / "tests/bare/bare.rcs", ROOT / "tests/bare/bare.scn"))
+    # Arrays in every position, indices out of range (docs/language.md §4).
+    pairs.append((ROOT / "tests/arrays/arrays.rcs", ROOT / "tests/arrays/arrays.scn"))
     # Names that the naming schemes must keep apart (tests/test_naming.py).
     pairs.append((ROOT / "tests/naming/rcs_runtime.rcs", ROOT / "tests/naming/scenarios.scn"))
     return pairs

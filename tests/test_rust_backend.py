@@ -30,7 +30,9 @@ EDGE = ROOT / "tests/edge/edge.rcs"
 BARE = ROOT / "tests/bare/bare.rcs"
 HOSTILE_NAMES = ROOT / "tests/naming/rcs_runtime.rcs"
 PAIRS = CONFORMANCE
-CRATES = [SUBMARINE, CELL, STRESS, EDGE, BARE, HOSTILE_NAMES]
+ARRAYS = ROOT / "tests/arrays/arrays.rcs"
+PATH_FOLLOW = ROOT / "examples/path_follow/path_follow.rcs"
+CRATES = [SUBMARINE, CELL, STRESS, EDGE, BARE, HOSTILE_NAMES, ARRAYS, PATH_FOLLOW]
 
 
 
