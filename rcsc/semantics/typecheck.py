@@ -244,43 +244,15 @@ class Checker:
         return n
 
     def _index_warning(self, index: m.Expr, t: ArrayType, span, writing: bool) -> None:
-        """W0250 when an index is known to be outside 0..size-1: a constant, or
-        a variable whose declared range lies wholly outside (W0251 when only partly)."""
+        """W0250 when an index is a constant outside 0..size-1.  (An index that
+        only may be outside is W0251, asked of the solver with the rule's
+        condition: `rcsc.checks.values`.)"""
         if isinstance(index, m.Const) and isinstance(index.value, int) and not isinstance(index.value, bool):
             if not (0 <= index.value < t.size):
                 effect = "the write is ignored" if writing else f"the read gives the zero value of `{t.elem}`"
                 self.d.add("W0250", span, f"index {index.value} is outside the array of {t.size} elements", "out of range").with_note(
                     f"valid indices are 0..{t.size - 1}; out of range {effect}"
                 )
-            return
-        rng = self._declared_range(index)
-        if rng is None:
-            return
-        lo, hi = rng.lo, rng.hi
-        if lo >= 0 and hi < t.size:
-            return
-        witness = lo if lo < 0 else hi
-        effect = "the write is ignored" if writing else f"the read gives the zero value of `{t.elem}`"
-        self.d.add("W0251", span, f"the index may be {witness}, outside the array of {t.size} elements", "may be out of range").with_note(
-            f"its declared range is {lo}..{hi}; valid indices are 0..{t.size - 1}; out of range {effect}"
-        ).with_help(f"declare the index `in 0..{t.size - 1}`, or guard the rule with `k < len(...)`")
-
-    def _declared_range(self, e: m.Expr) -> m.Range | None:
-        if not isinstance(e, m.Ref):
-            return None
-        c = self.s.controller
-        if e.kind == "local" and c is not None:
-            return c.locals[e.name].range
-        if e.kind == "status" and c is not None:
-            return c.status_fields[e.name].range
-        if e.kind == "gm":
-            return self.g.gm[e.name].range
-        if e.kind == "param" and self.s.verb is not None:
-            p = self.s.verb.param(e.name)
-            return p.range if p is not None else None
-        if e.kind == "arg" and self.s.fn_params is not None:
-            return self.s.fn_params[e.name].range
-        return None
 
     def index_expr(self, node: ast.Expr) -> m.Expr:
         idx = self.expr(node)
