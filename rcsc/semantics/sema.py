@@ -81,6 +81,11 @@ class _Sema:
                 self.g.types[name] = EnumType(name, tuple(members), item.span)
             elif isinstance(item, ast.Record):
                 self.record_ast[name] = item
+        # An array length in a record field may name a constant (`[f64; N]`):
+        # constants resolve lazily from here on.
+        for name, item in self.decls.items():
+            if isinstance(item, ast.Const):
+                self.const_ast[name] = item
         for name in self.record_ast:
             self._record(name)
 
