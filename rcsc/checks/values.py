@@ -382,7 +382,8 @@ class _Plan:
         d.with_note(f"witness: {text}")
         d.with_note(f"valid indices are 0..{size - 1}; out of range {effect}")
         d.with_help(f"bound the index in the rule's condition (`k < {size}`, or an earlier rule `k >= len(...)`), or declare its range")
-        d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data, "state": self.where[self.hit][0]}
+        d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data, "state": self.where[self.hit][0],
+                  "size": size}
 
     def _expr_checks(self, e: m.Expr, contexts: list[list], r: m.Rule) -> None:
         if not _needs_solver(e):
