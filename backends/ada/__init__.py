@@ -181,7 +181,7 @@ class AdaBackend(Target):
         params = "; ".join(f"{self.n.member(q.name)} : {self.atype(q.type)}" for q in f.params)
         spec = f"function {self.n.function(f.name)}{f' ({params})' if params else ''} return {self.atype(f.ret)}"
         used = {e.name for e in m.walk_expr(f.body) if isinstance(e, m.Ref) and e.kind == "arg"} if f.body is not None else set()
-        return {"spec": spec, "where": self.where_text(f.span), "name": self.n.function(f.name),
+        return {"spec": spec, "where": self.where_text(f.span), "doc": ada_comment(f.doc), "name": self.n.function(f.name),
                 "unused": [self.n.member(q.name) for q in f.params if q.name not in used],
                 "body": self.expr(f.body) if f.body is not None else "", "zero": self.literal(zero_value(f.ret), f.ret)}
 
@@ -251,6 +251,10 @@ class AdaBackend(Target):
 
     def age_expr(self, e: m.Age) -> str:
         return self.age_of(f"Buf.Gm_Stamp.{self.n.member(e.name)}")
+
+    def cycle_expr(self, e: m.Cycle) -> str:
+        assert self.info is not None
+        return f"Rcs_Num.Step_Number (Cycle, {max(1, self.info.c.divider)})"
 
     def instate_expr(self, e: m.InState) -> str:
         assert self.info is not None
@@ -333,7 +337,8 @@ class AdaBackend(Target):
         suffix = SUFFIX[e.type.name]
         if e.func == "abs" and suffix == "F64":
             return f"(abs {self.expr(e.args[0])})"
-        return f"Rcs_Num.{e.func.capitalize()}_{suffix} ({', '.join(args)})"
+        func = "_".join(w.capitalize() for w in e.func.split("_"))  # round_even -> Round_Even
+        return f"Rcs_Num.{func}_{suffix} ({', '.join(args)})"
 
     # ---- statements ----------------------------------------------------------------
 
@@ -402,7 +407,7 @@ class AdaBackend(Target):
         pre, post = self.stmts(c.pre, 1), self.stmts(c.post, 1)
         gm_stamps = [f"Buf.Gm_Stamp.{n.member(u.name)} := {self.tick()};" for u in c.writes] if keeps_gm_stamps(self.design) else []
         ctx = {
-            "pkg": n.ctrl_package(c.name), "name": ada_comment(c.name), "kind": "simulator" if c.simulator else "controller",
+            "pkg": n.ctrl_package(c.name), "name": ada_comment(c.name), "doc": ada_comment(c.doc), "kind": "simulator" if c.simulator else "controller",
             "level": c.level, "where": self.where_text(c.span), "budget_ns": c.budget_ns, "symbol": f"rcs_ada_step_{index}",
             "own": self.own_of(c.name), "cmd": f"Buf.{n.buffer_member(c.name, 'cmd')}",
             "subs": subs, "locals": [self.decl(x, v.type) for x, v in c.locals.items()], "init": init,
@@ -422,7 +427,7 @@ class AdaBackend(Target):
         self.verb = plan.verb
         layout = plan_layout(plan, self.impure)
         body = self.layout(layout)
-        return {"fn": self.n.plan_fn(plan.verb), "verb": ada_comment(plan.verb), "verb_const": self.n.verb(c.name, plan.verb),
+        return {"fn": self.n.plan_fn(plan.verb), "verb": ada_comment(plan.verb), "doc": ada_comment(plan.doc), "verb_const": self.n.verb(c.name, plan.verb),
                 "where": self.where_text(plan.span), "continuous": plan.continuous, "needs_state": tests_state(layout),
                 "body": body, "uses_cycle": any(re.search(r"\bCycle\b", x) for x in body)}
 
@@ -478,7 +483,8 @@ class AdaBackend(Target):
             body += [f"{own}.Head.Status := Rcs_Num.Error;", f"{own}.Head.Error_Code := {self.literal(nxt.code, I32)};",
                      f"{own}.Head.State := St_Error;", "Plan := 0;"]
         guard = "otherwise" if r.guard is None else self.comment(r.guard_span.text)
-        head = [f"--  {r.label} ({self.where_text(r.span)}): {guard} | {self.comment(str(r.state))} -> {self.comment(r.next.span.text)}"]
+        head = [f"--  {self.comment(r.doc)}"] if r.doc else []
+        head.append(f"--  {r.label} ({self.where_text(r.span)}): {guard} | {self.comment(str(r.state))} -> {self.comment(r.next.span.text)}")
         if not cond:
             return head + body + ["return;"]
         return head + [f"if {cond} then"] + ["   " + x for x in body] + ["   return;", "end if;"]
