@@ -353,6 +353,111 @@ Fixed:
     block filt: LOWPASS(tau = 0.5, dt = 0.01)
     post { filt(x = raw); out = filt.y; }
 """),
+    # ---- arrays and path plans ----------------------------------------------
+    ("E0250", _E, "empty array", """
+An array holds at least one element: its length (`[T; N]`, `[value; N]`) is 1
+or more, and an array literal `[a, b, ...]` lists at least one element. A path
+plan steps through the knots of a path, so an empty path has nothing to step
+through: give it at least one knot and keep the number in use in a separate
+count (`count: i32 in 1..8`).
+
+Wrong:
+
+    verb FOLLOW(xs: [f64; 0])
+
+Fixed:
+
+    verb FOLLOW(xs: [f64; MAX_KNOTS], count: i32 in 1..8)
+"""),
+    ("E0251", _E, "array length is not an integer constant", """
+An array's length, and the count of `[value; count]`, is fixed when the design
+is compiled: an integer literal or the name of an integer constant, at most
+65536. The value repeated by `[value; count]` is a constant too (fill an array
+of run-time values element by element, or write the elements out).
+
+Wrong:
+
+    local xs: [f64; n] = [0.0; n]        // n is a local
+
+Fixed:
+
+    const N: i32 = 16
+    local xs: [f64; N] = [0.0; N]
+"""),
+    ("E0252", _E, "array literal of the wrong length", """
+An array literal must have as many elements as the array type it initialises or
+is assigned to: arrays of different lengths are different types. Write every
+element, or use the repeat form `[value; N]`.
+
+Wrong:
+
+    gm trail: [f64; 4] = [0.0, 0.0]
+
+Fixed:
+
+    gm trail: [f64; 4] = [0.0; 4]
+"""),
+    ("E0253", _E, "not an array, or an index that is not an integer", """
+Only arrays can be indexed (`a[i]`), and an index is an integer (`i32`, `i64` or
+`u32`); `len`, `sum`, `min_of` and `max_of` take an array. Convert a float
+index explicitly, which says how it is rounded.
+
+Wrong:
+
+    setpoint = cmd.xs[t / DT]            // t / DT is f64
+
+Fixed:
+
+    setpoint = cmd.xs[i32(t / DT)]
+"""),
+    ("E0254", _E, "operation not defined for arrays", """
+Arrays are assigned and passed whole, and read and written element by element.
+They cannot be compared with `==`/`!=` (compare the elements you mean), updated
+whole with `+=`, `-=` or `*=`, or carry a declared range on their elements.
+
+Wrong:
+
+    F1: path == HOME_PATH | new -> done;
+
+Fixed:
+
+    F1: path[0] == HOME_PATH[0] and path[1] == HOME_PATH[1] | new -> done;
+"""),
+    ("W0250", _W, "array index always out of range", """
+The index is a constant outside 0..N-1 of an array of N elements. The access is
+defined (a read gives the element type's zero value: 0, 0.0, false, the first
+enum member, a record or array of zeros; a write is ignored) and is the same in
+the simulator, C and Rust, but it is almost certainly an off-by-one.
+
+Wrong:
+
+    setpoint = Knot(x = cmd.xs[8], y = cmd.ys[8])     // xs: [f64; 8]
+
+Fixed:
+
+    setpoint = Knot(x = cmd.xs[7], y = cmd.ys[7])
+"""),
+    ("W0251", _W, "array index may be out of range", """
+In the rule named, with the inputs of the witness (its own condition true, the
+earlier rules of its state false, declared ranges assumed), an index is outside
+0..N-1 of the array it reads or writes. Out of range a read gives the element
+type's zero value and a write is ignored, in every execution, so the step goes
+on with a wrong value. A path plan steps its knot index through the path: test
+the end of the path in an earlier rule of the state, and keep the index from
+going below zero (a declared range).
+
+Wrong:
+
+    status k: i32 = 0
+    F1: k >= cmd.count          | STEP -> SETTLE;
+    F2: otherwise               | STEP -> STEP | setpoint = cmd.xs[k], k += 1;
+
+Fixed:
+
+    status k: i32 in 0..8 = 0
+    F1: k >= cmd.count or k >= len(cmd.xs) | STEP -> SETTLE;
+    F2: otherwise               | STEP -> STEP | setpoint = cmd.xs[k], k += 1;
+"""),
     # ---- hierarchy ----------------------------------------------------------
     ("E0300", _E, "controller has more than one supervisor", """
 RCS hierarchies are trees (paper sections 3.2 and 3.5): every controller takes

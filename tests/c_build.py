@@ -92,6 +92,8 @@ def _examples() -> list[tuple[Path, Path]]:
     pairs.append((ROOT / "tests/bare/bare.rcs", ROOT / "tests/bare/bare.scn"))
     # The math built-ins and `cycle` at their edges (signed zeros, NaN, infinities, halves).
     pairs.append((ROOT / "tests/mathfn/mathfn.rcs", ROOT / "tests/mathfn/mathfn.scn"))
+    # Arrays in every position, indices out of range (docs/language.md §4).
+    pairs.append((ROOT / "tests/arrays/arrays.rcs", ROOT / "tests/arrays/arrays.scn"))
     # Names that the naming schemes must keep apart (tests/test_naming.py).
     pairs.append((ROOT / "tests/naming/rcs_runtime.rcs", ROOT / "tests/naming/scenarios.scn"))
     # Every block of std.blocks; a controller type with two instances.

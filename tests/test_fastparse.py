@@ -142,6 +142,14 @@ CORNERS = [
     "design d\nblock B(k: f64) {\n input x: f64 = 0.0\n state s: bool = false\n output y: f64 = k\n step { y = x; s = not s; }\n step { }\n}\nblock E() { }\n",
     "design d\ncontroller C level 1 budget 1 ms {\n block f: B()\n post { f(x = 1.0); f(2.0); }\n plan P { P0: f.y > 0.0 | new -> done | f(); }\n}\n",
     "design d\nconst type: i32 = 1\nconst step: i32 = type\nconst input: i32 = state\n",  # new keywords are names elsewhere
+    # Arrays: types (nested, a constant length), literals (empty, trailing
+    # comma, repeat), indexing after names, calls, fields, parentheses and
+    # literals, and indexed assignment in a block and in a job list.
+    "design d\nconst A: [[f64; 2]; N] = [[1.0, 2.0,], [0.0; 2]]\ngm g: [i32; 3] = []\n",
+    "design d\nconst B: i32 = f(x)[1] + r.xs[i + 1][j] + (a)[0] + [1, 2][k] - -a[0]\n",
+    "design d\ncontroller C level 1 budget 1 ms {\n    pre { a[i] = 1; r.xs[k + 1] += 2; }\n"
+    "    plan P { R: a[0] > 1 | new -> done | a[i] = [x; 2], S.V(p = [1, 2]), r.b[0] -= 1; }\n}\n",
+    "design d\nfn f(a: [bool; 2], b: [[E; 1]; 3]) -> [i64; 2] = [a[0]; 2]\n",
     "design d\ngm x: f64 = 0.0 to env\ngm y: f64 = 0.0 from env\ngm to: i32 = 0\n",  # `to env` and `from env`
     "design d\ncontroller C level 1 budget 1 ms period 20 ms {\n}\n",  # the `period` attribute
     "design d\nconst A: i32 = and\n",  # `and` cannot start an expression: a name

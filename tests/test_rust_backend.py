@@ -31,7 +31,9 @@ BARE = ROOT / "tests/bare/bare.rcs"
 HOSTILE_NAMES = ROOT / "tests/naming/rcs_runtime.rcs"
 MATHFN = ROOT / "tests/mathfn/mathfn.rcs"  # the math built-ins, `cycle`, doc comments in comments
 PAIRS = CONFORMANCE
-CRATES = [SUBMARINE, CELL, STRESS, EDGE, BARE, HOSTILE_NAMES, MATHFN]
+ARRAYS = ROOT / "tests/arrays/arrays.rcs"
+PATH_FOLLOW = ROOT / "examples/path_follow/path_follow.rcs"
+CRATES = [SUBMARINE, CELL, STRESS, EDGE, BARE, HOSTILE_NAMES, MATHFN, ARRAYS, PATH_FOLLOW]
 
 
 

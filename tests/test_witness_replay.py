@@ -101,7 +101,7 @@ def test_held_status_cases_have_paths() -> None:
     assert seen == HELD_CODES
 
 
-VALUE_CODES = {"W0524", "W0525"}
+VALUE_CODES = {"W0524", "W0525", "W0251"}
 
 
 def _at(rule, span):
@@ -139,6 +139,10 @@ def _replay_value(design, d) -> None:
         assert fired is None or fired.index >= rule.index, f"{where}: at the witness the earlier `{fired.label}` fires"
     else:  # a job runs when its rule fires
         assert fired is rule, f"{where}: at the witness `{fired and fired.label}` fires, not `{rule.label}`"
+    if d.code == "W0251":  # the index is outside the array
+        v = eval_expr(e, env)
+        assert not (0 <= v < d.data["size"]), f"{where}: the index {v} is inside 0..{d.data['size'] - 1}"
+        return
     if d.code == "W0524":
         lo, hi = d.data["range"]
         v = eval_expr(e, env)
@@ -167,6 +171,6 @@ def test_value_witnesses_replay(path: Path) -> None:
 def test_value_cases_are_replayed() -> None:
     """The value cases have witnesses with inputs (so the replay above checks something)."""
     n = 0
-    for name in ("W0524_range_flow.rcs", "W0525_overflow_division.rcs"):
+    for name in ("W0524_range_flow.rcs", "W0525_overflow_division.rcs", "W0251_index_may_be_out_of_range.rcs"):
         n += sum(1 for d in check_path(str(CASES / name)).diags if d.code in VALUE_CODES and d.data.get("witness"))
     assert n >= 5

@@ -16,6 +16,7 @@ from rcsc.outputs.backend import (
     RuleStep,
     initial_value,
     ordered_types,
+    types_with_arrays,
     StateTest,
     expr_key,
     keeps_gm_stamps,
@@ -26,9 +27,9 @@ from rcsc.outputs.backend import (
     schedule_of,
 )
 from rcsc.backends.c.tables import main_tables
-from rcsc.backends.c.target import CTarget, _strip_parens, c_comment, c_string
+from rcsc.backends.c.target import INT_SUFFIX, CTarget, _strip_parens, c_comment, c_string
 from rcsc.sim.simulate import zero_value
-from rcsc.semantics.types import I32, EnumType, RecordType
+from rcsc.semantics.types import DURATION, I32, ArrayType, EnumType, FloatType, RecordType
 
 RUNTIME_FILES = ("rcs_num.h", "rcs_runtime.h", "rcs_runtime.c", "rcs_link.h", "rcs_shm.h", "rcs_shm.c")
 LAUNCHER_FILES = ("rcs_launch.h", "rcs_launch.c")  # several CPUs only
@@ -101,12 +102,16 @@ class CBackend(CTarget):
     def design_header(self, ctrls: list[m.Controller]) -> dict:
         d = self.design
         types = []
-        for t in ordered_types(d):
+        for t in types_with_arrays(d):
             if isinstance(t, EnumType):
                 types.append({"kind": "enum", "name": self.ctype(t), "members": [self.member(t, x) for x in t.members]})
+            elif isinstance(t, ArrayType):
+                types.append({"kind": "record", "name": self.ctype(t), "fields": [f"{self.ctype(t.elem)} v[{t.size}];"],
+                              "helpers": self.array_helpers(t)})
             else:
                 assert isinstance(t, RecordType)
-                types.append({"kind": "record", "name": self.ctype(t), "fields": [f"{self.ctype(ft)} {self.ident(n)};" for n, ft in t.fields]})
+                types.append({"kind": "record", "name": self.ctype(t), "fields": [f"{self.ctype(ft)} {self.ident(n)};" for n, ft in t.fields],
+                              "helpers": []})
         n = self.n
         consts = [{"name": n.const(k.name), "value": self.literal(k.value, k.type), "where": self.where_text(k.span)} for k in d.consts.values()]
         gm = [f"{self.ctype(v.type)} {self.ident(v.name)};" for v in d.gm.values()]
@@ -135,6 +140,23 @@ class CBackend(CTarget):
             "protos": [f"static inline {self.prototype(f)};" for f in fns],
             "fns": [self.function(f) for f in fns],
         }
+
+    def array_helpers(self, t: ArrayType) -> list[str]:
+        """An array type's element read (the element type's zero outside
+        0..N-1, as in the simulator) and, for numbers, `sum`, `min_of` and
+        `max_of` folded from the first element to the last."""
+        at, et = self.ctype(t), self.ctype(t.elem)
+        zero = self.literal(zero_value(t.elem), t.elem)
+        out = [f"static inline {et} {self.n.array_fn(t, 'get')}(const {at} *a, int64_t i) {{",
+               f"    return i >= 0 && i < {t.size} ? a->v[i] : {zero};", "}"]
+        if t.elem.is_numeric or t.elem == DURATION:
+            suffix = "f64" if isinstance(t.elem, FloatType) else INT_SUFFIX[t.elem.name]
+            step = {"sum": "s + a->v[k]" if suffix == "f64" else f"rcs_add_{suffix}(s, a->v[k])",
+                    "min_of": f"rcs_min_{suffix}(s, a->v[k])", "max_of": f"rcs_max_{suffix}(s, a->v[k])"}
+            for op, expr in step.items():
+                out += [f"static inline {et} {self.n.array_fn(t, op)}(const {at} *a) {{", f"    {et} s = a->v[0];",
+                        f"    for (int64_t k = 1; k < {t.size}; k++) s = {expr};", "    return s;", "}"]
+        return out
 
     def prototype(self, f: m.Function) -> str:
         params = ", ".join(f"{self.ctype(q.type)} {self.ident(q.name)}" for q in f.params) or "void"

@@ -41,7 +41,7 @@ C_KEYWORDS = frozenset(
 # Fixed words inside design-wide names; a design name equal to one gets a trailing `_`.
 TAGS = frozenset(
     "H VERB STATUS PERIOD_NS BUDGET_NS init step args cmd status fields state rule gm gm_stamps buffers buffers_init "
-    "io io_read io_write externs".split()
+    "io io_read io_write externs ARRAY".split()
 )
 # Leads of the file-local names (`S_`, `RULE_`, `ctrl_`...) and the runtime's prefixes: a
 # design whose name is one of them, or starts with one and `_`, gets a trailing `_`.
@@ -100,6 +100,22 @@ class CNames:
 
     def type(self, name: str) -> str:
         return self._g(self.frag(name))
+
+    def _type_key(self, t) -> str:
+        """A type as name parts: a built-in's name, a declared type's fragment,
+        `ARRAY__<element>__<length>` for an array (ARRAY is a tag: no design name)."""
+        elem = getattr(t, "elem", None)
+        if elem is not None:
+            return nm.SEP.join(("ARRAY", self._type_key(elem), str(t.size)))
+        return t.name if t.name in ("bool", "i32", "i64", "u32", "f64", "duration") else self.frag(t.name)
+
+    def array_type(self, t) -> str:
+        """The struct that holds an array type's elements (`v`)."""
+        return self._g(self._type_key(t))
+
+    def array_fn(self, t, op: str) -> str:
+        """An array type's helper: `get` (element or zero), `sum`, `min_of`, `max_of`."""
+        return self._g(self._type_key(t), op)
 
     def enum_member(self, enum: str, member: str) -> str:
         return self._g(self.frag(enum), self.frag(member))

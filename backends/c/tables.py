@@ -9,9 +9,9 @@ templates/main.c.j2.
 from __future__ import annotations
 
 from rcsc.semantics import model as m
-from rcsc.outputs.backend import cpu_gm, cpu_ticks, keeps_gm_stamps, ordered_types
+from rcsc.outputs.backend import cpu_gm, cpu_ticks, keeps_gm_stamps, ordered_types, types_with_arrays
 from rcsc.outputs.events import interface_hash
-from rcsc.semantics.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type
+from rcsc.semantics.types import BOOL, DURATION, ArrayType, EnumType, FloatType, IntType, RecordType, Type
 
 from rcsc.backends.c.target import CTarget, c_string
 
@@ -24,6 +24,8 @@ def type_ref(tg: CTarget, t: Type) -> str:
         return "&" + _BUILTIN[t.name]
     if t == DURATION:
         return "&rcs_type_duration"
+    if isinstance(t, ArrayType):
+        return "&" + tg.n.local("type", tg.n.array_type(t))
     return "&" + tg.n.local("type", t.name)
 
 
@@ -36,7 +38,18 @@ def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: li
     (another target's Main Program may own it under another name)."""
     d, n = tg.design, tg.n
     types = []
-    for t in ordered_types(d):
+    for t in types_with_arrays(d):
+        if isinstance(t, ArrayType):
+            # An array: one row per element (name "", offset of v[i]), so the
+            # runtime walks it as it walks a record and prints it as `[...]`.
+            at = tg.ctype(t)
+            fields = n.local("fields", at)
+            rows = [f"{{\"\", offsetof({at}, v) + {i}u * sizeof(((const {at} *)0)->v[0]), {type_ref(tg, t.elem)}}}," for i in range(t.size)]
+            types.append({
+                "arrays": [f"static const rcs_field {fields}[] = {{"] + ["    " + r for r in rows] + ["};"],
+                "decl": f"static const rcs_type {type_ref(tg, t)[1:]} = {{RCS_T_ARRAY, {c_string(str(t))}, NULL, 0u, {fields}, {t.size}u}};",
+            })
+            continue
         desc = n.local("type", t.name)
         if isinstance(t, EnumType):
             members = n.local("members", t.name)
@@ -201,6 +214,8 @@ def _leaves(tg: CTarget, path: str, t) -> list[tuple[str, str]]:
         return [(path, "RCS_W_ENUM")]
     if isinstance(t, RecordType):
         return [leaf for n, ft in t.fields for leaf in _leaves(tg, f"{path}.{tg.ident(n)}", ft)]
+    if isinstance(t, ArrayType):
+        return [leaf for i in range(t.size) for leaf in _leaves(tg, f"{path}.v[{i}]", t.elem)]
     return [(path, _WIRE_KIND[t.name])]
 
 

@@ -16,7 +16,7 @@ import re
 from rcsc.semantics import model as m
 from rcsc.backends.c.naming import CNames
 from rcsc.outputs.backend import BuildOptions, CtrlInfo, Target, base_cpu, cpu_ticks, expr_key, impure_functions, lower_controller
-from rcsc.semantics.types import BOOL, DURATION, I64, U32, EnumType, FloatType, IntType, RecordType, Type
+from rcsc.semantics.types import BOOL, DURATION, I64, U32, ArrayType, EnumType, FloatType, IntType, RecordType, Type
 
 # Suffix of the rcs_num.h helper for each integer type.
 INT_SUFFIX = {"i32": "i32", "i64": "i64", "u32": "u32", "duration": "i64"}
@@ -95,6 +95,8 @@ class CTarget(Target):
             return "double"
         if isinstance(t, (EnumType, RecordType)):
             return self.n.type(t.name)
+        if isinstance(t, ArrayType):
+            return self.n.array_type(t)
         raise ValueError(f"no C type for {t}")
 
     def member(self, t: EnumType, name: str) -> str:
@@ -138,6 +140,10 @@ class CTarget(Target):
             # A record without fields holds one unused member (C has no empty struct).
             inner = ", ".join(self.literal(value[n], ft, braces) for n, ft in t.fields) or "0"
             return "{" + inner + "}" if braces else f"(({self.ctype(t)}){{{inner}}})"
+        if isinstance(t, ArrayType):
+            # The struct of one member `v` (the elements), so `{{...}}`.
+            inner = ", ".join(self.literal(v, t.elem, True) for v in value)
+            return "{{" + inner + "}}" if braces else f"(({self.ctype(t)}){{{{{inner}}}}})"
         raise ValueError(f"no C literal for {t}")
 
     # ---- expressions ---------------------------------------------------------------
@@ -209,6 +215,25 @@ class CTarget(Target):
             obj = f"({obj})"
         return f"{obj}.{self.ident(e.name)}"
 
+    def array_ptr(self, e: m.Expr) -> str:
+        """A pointer to the array value of `e`: its address when it is stored
+        somewhere (a variable, a field, a constant's compound literal), else a
+        one-element compound literal that holds a copy (C99 6.5.2.5)."""
+        text = self.expr(e)
+        x = e
+        while isinstance(x, m.Field):
+            x = x.obj
+        if isinstance(x, (m.Ref, m.Const)) or (isinstance(x, m.SubView) and x.attr == "field"):
+            return f"&{text}" if isinstance(x, m.Const) or isinstance(e, m.Ref) else f"&({text})"
+        return f"({self.ctype(e.type)}[1]){{{text}}}"
+
+    def index_expr(self, e: m.Index) -> str:
+        """`a[i]`: the element, or the element type's zero when i is outside 0..N-1 (rcs_ARRAY_..._get)."""
+        return f"{self.n.array_fn(e.obj.type, 'get')}({self.array_ptr(e.obj)}, {self.expr(e.index)})"
+
+    def arraylit_expr(self, e: m.ArrayLit) -> str:
+        return f"(({self.ctype(e.type)}){{{{{', '.join(self.expr(x) for x in e.items)}}}}})"
+
     def unary_expr(self, e: m.Unary) -> str:
         v = self.expr(e.operand)
         if e.op == "not":
@@ -256,6 +281,8 @@ class CTarget(Target):
             return self._convert(args[0], e.args[0].type, e.type)
         if e.func == "seconds":
             return f"((double){args[0]} / 1e9)"
+        if e.func in ("sum", "min_of", "max_of"):
+            return f"{self.n.array_fn(e.args[0].type, e.func)}({self.array_ptr(e.args[0])})"
         suffix = "f64" if isinstance(e.type, FloatType) else INT_SUFFIX[e.type.name]
         if e.func == "abs":
             return f"rcs_fabs({args[0]})" if suffix == "f64" else f"rcs_abs_{suffix}({args[0]})"
@@ -282,6 +309,21 @@ class CTarget(Target):
         pad = "    " * indent
         target = self.lvalue(s.target)
         value = self.expr(s.value)
+        if s.target.index is not None:
+            # `a[i] = v`: the value, then the index (the simulator's order);
+            # a write outside 0..N-1 is ignored.
+            t = s.target.type
+            size = self.design_array_size(s.target)
+            element = f"{target}.v[rcs_i]"
+            if s.op == "=":
+                store = f"{element} = rcs_x;"
+            elif t.name in INT_SUFFIX:
+                store = f"{element} = rcs_{ARITH[s.op[0]]}_{INT_SUFFIX[t.name]}({element}, rcs_x);"
+            else:
+                store = f"{element} = {element} {s.op[0]} rcs_x;"
+            return [f"{pad}{{", f"{pad}    const {self.ctype(t)} rcs_x = {value};",
+                    f"{pad}    const int64_t rcs_i = (int64_t){self.expr(s.target.index)};",
+                    f"{pad}    if (rcs_i >= 0 && rcs_i < {size}) {store}", f"{pad}}}"]
         if s.op == "=":
             return [f"{pad}{target} = {value};"]
         op = s.op[0]
@@ -289,6 +331,17 @@ class CTarget(Target):
         if t.name in INT_SUFFIX:
             return [f"{pad}{target} = rcs_{ARITH[op]}_{INT_SUFFIX[t.name]}({target}, {value});"]
         return [f"{pad}{target} = {target} {op} {value};"]
+
+    def design_array_size(self, lv: m.LValue) -> int:
+        """The length of the array that `lv` (an indexed assignment) writes an element of."""
+        c = self.info.c if self.info is not None else None
+        assert c is not None
+        t = {"gm": lambda: self.design.gm[lv.name].type, "local": lambda: c.locals[lv.name].type,
+             "status": lambda: c.status_fields[lv.name].type}[lv.kind]()
+        for part in lv.path:
+            t = t.field_type(part)  # type: ignore[attr-defined]
+        assert isinstance(t, ArrayType)
+        return t.size
 
     def callstmt_stmt(self, s: m.CallStmt, indent: int) -> list[str]:
         return ["    " * indent + f"(void){self.expr(s.call)};"]

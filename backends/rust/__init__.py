@@ -29,7 +29,14 @@ from rcsc.outputs.backend import OutFile, RuleStep, ordered_types, StateTest, bu
 from rcsc.backends.rust.fmt import Array, Atom, Bin, Call, Node, Struct, arm, assign, expr_stmt, field_decl, fn_head, if_open, let, pad, tail, Unary
 from rcsc.backends.rust.target import RustTarget
 from rcsc.sim.simulate import zero_value
-from rcsc.semantics.types import I32, EnumType, RecordType, Type
+from rcsc.semantics.types import I32, ArrayType, EnumType, RecordType, Type
+
+def _innermost(t: Type) -> Type:
+    """The element type of an array of arrays of ..., else `t`."""
+    while isinstance(t, ArrayType):
+        t = t.elem
+    return t
+
 
 LIB_ALLOWS = [
     # The design's names are kept as written (controllers, verbs, states, Global Memory).
@@ -180,6 +187,8 @@ class RustBackend(RustTarget):
         return self.where_text(span) if span is not None else t.name
 
     def lib_type(self, t: Type) -> str:
+        if isinstance(t, ArrayType):
+            return f"num::Arr<{self.lib_type(t.elem)}, {t.size}>"
         return f"types::{self.rtype(t)}" if isinstance(t, (EnumType, RecordType)) else self.rtype(t)
 
     def externs_stub(self, externs: list[m.Function]) -> dict:
@@ -187,13 +196,14 @@ class RustBackend(RustTarget):
         uses_types = False
         for f in externs:
             params = ["&self"] + [f"_{self.param(q.name)}: {self.rtype(q.type)}" for q in f.params]
-            uses_types |= any(isinstance(t, (EnumType, RecordType)) for t in [f.ret] + [q.type for q in f.params])
+            uses_types |= any(isinstance(_innermost(t), (EnumType, RecordType)) for t in [f.ret] + [q.type for q in f.params])
             fns.append({
                 "where": f"{self.where_text(f.span)}, budget {_duration(f.budget_ns)}",
                 "head": fn_head(1, "", self.ident(f.name), params, self.rtype(f.ret)),
                 "zero": tail(self.literal(zero_value(f.ret), f.ret), 2),
             })
-        return {"design": self.design.name, "fns": fns, "uses_types": uses_types}
+        uses_num = any(isinstance(t, ArrayType) for f in externs for t in [f.ret] + [q.type for q in f.params])
+        return {"design": self.design.name, "fns": fns, "uses_types": uses_types, "uses_num": uses_num}
 
     # ---- types.rs --------------------------------------------------------------------------
 
@@ -260,8 +270,10 @@ class RustBackend(RustTarget):
             used = {e.name for e in m.walk_expr(f.body) if isinstance(e, m.Ref) and e.kind == "arg"}
             params = [f"{'' if q.name in used else '_'}{self.param(q.name)}: {self.rtype(q.type)}" for q in f.params]
             body = tail(self.expr(f.body), 1)
-            if any(isinstance(t, (EnumType, RecordType)) for t in [f.ret] + [q.type for q in f.params]):
+            if any(isinstance(_innermost(t), (EnumType, RecordType)) for t in [f.ret] + [q.type for q in f.params]):
                 self.uses.add("types")
+            if any(isinstance(t, ArrayType) for t in [f.ret] + [q.type for q in f.params]):
+                self.uses.add("num")
             out.append({
                 "where": self.where_text(f.span),
                 "allow": len(params) > 7,

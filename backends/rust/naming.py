@@ -60,7 +60,7 @@ FIXED = frozenset(
 # The values a parameter of a pure or extern function could meet: `types::*` and the prelude.
 PARAM_FIXED = frozenset("sub_done sub_error sub_executing sub_status Some None Ok Err".split())
 # Fixed words inside joined names.
-TAGS = frozenset("VERB STATUS PERIOD_NS cmd status args fields STATES RULES of value".split())
+TAGS = frozenset("VERB STATUS PERIOD_NS cmd status args fields STATES RULES of value ARRAY Arr".split())
 RESERVED = nm.Reserved(RUST_KEYWORDS | PRIMITIVES | PRELUDE | FIXED | TAGS, [r"cse_\d+\Z"])
 # Short enough that a template line holding a name and a type stays within rustfmt's
 # 100 columns; a module is also a file name.
@@ -136,6 +136,13 @@ class RustNames:
 
     def status_view(self, ctrl: str) -> str:
         return self.join("status", self.frag(ctrl))
+
+    def array_key(self, t) -> str:
+        """An array type as a name part: `ARRAY__<element>__<length>` (ARRAY is a tag)."""
+        elem = getattr(t, "elem", None)
+        if elem is not None:
+            return nm.SEP.join(("ARRAY", self.array_key(elem), str(t.size)))
+        return t.name if t.name in ("bool", "i32", "i64", "u32", "f64", "duration") else self.frag(t.name)
 
     def helper(self, type_name: str, tag: str, builtin: bool = False) -> str:
         """`<T>__of` (a `Value` to the type) and `<T>__value` (the type to a `Value`).

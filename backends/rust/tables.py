@@ -12,11 +12,11 @@ from __future__ import annotations
 import re
 
 from rcsc.semantics import model as m
-from rcsc.outputs.backend import cpu_gm, cpu_ticks, keeps_gm_stamps, ordered_types
+from rcsc.outputs.backend import array_types, cpu_gm, cpu_ticks, keeps_gm_stamps, ordered_types
 from rcsc.outputs.events import interface_hash
 from rcsc.backends.rust.fmt import Array, Atom, Call, Cast, Node, Struct, Unary, arm, assign, field_decl, fn_head, let, pad, tail
 from rcsc.backends.rust.target import RustTarget, rust_string
-from rcsc.semantics.types import BOOL, DURATION, I32, U32, EnumType, FloatType, IntType, RecordType, Type
+from rcsc.semantics.types import BOOL, DURATION, I32, U32, ArrayType, EnumType, FloatType, IntType, RecordType, Type
 
 _BUILTIN = {"bool": "host::BOOL", "i32": "host::I32", "i64": "host::I64", "u32": "host::U32", "f64": "host::F64", "duration": "host::DURATION"}
 _VALUE = {"bool": "Bool", "i32": "I32", "i64": "I64", "u32": "U32", "f64": "F64", "duration": "Duration"}
@@ -37,7 +37,12 @@ class _Main:
     def type_ref(self, t: Type) -> Atom:
         if t == BOOL or t == DURATION or isinstance(t, (IntType, FloatType)):
             return Atom("&" + _BUILTIN[t.name], 11)
+        if isinstance(t, ArrayType):
+            return Atom(f"&{self.array_desc(t)}", 11)
         return Atom(f"&{self.tg.n.type_desc(t.name)}", 11)
+
+    def array_desc(self, t: ArrayType) -> str:
+        return self.tg.n.join("T", self.tg.n.array_key(t))
 
     def field_desc(self, name: str, t: Type) -> Call:
         return Call("field_desc", [_s(name), self.type_ref(t)])
@@ -54,11 +59,27 @@ class _Main:
         if isinstance(t, RecordType):
             self.record_value(t)
             return Call(self.tg.n.helper(t.name, "value"), [Atom(expr)])
+        if isinstance(t, ArrayType):
+            self.array_value(t)
+            return Call(self.tg.n.helper(self.tg.n.array_key(t), "value", builtin=True), [Atom(expr)])
         return Call(f"Value::{_VALUE[t.name]}", [Atom(expr)])
+
+    def array_value(self, t: ArrayType) -> None:
+        """`<ARRAY>__value`: an array as a `Value::Record` of its elements (the host prints it as `[...]`)."""
+        name = self.tg.n.helper(self.tg.n.array_key(t), "value", builtin=True)
+        if name in self.helpers:
+            return
+        self.helpers[name] = []
+        elem = self.to_value("*x", t.elem).flat()
+        self.helpers[name] = [f"fn {name}(a: {self.tg.rtype(t)}) -> Value {{",
+                              f"    Value::Record(a.0.iter().map(|x| {elem}).collect())", "}"]
 
     def from_value(self, arg: Node, t: Type) -> Node:
         """The design's value of an `Option<&Value>` expression."""
-        name = self.tg.n.helper(t.name, "of", builtin=not isinstance(t, (EnumType, RecordType)))
+        if isinstance(t, ArrayType):
+            name = self.tg.n.helper(self.tg.n.array_key(t), "of", builtin=True)
+        else:
+            name = self.tg.n.helper(t.name, "of", builtin=not isinstance(t, (EnumType, RecordType)))
         if name not in self.helpers:
             self.helpers[name] = []  # reserve (records refer to themselves through fields)
             self.helpers[name] = self._from_value_fn(t)
@@ -66,6 +87,12 @@ class _Main:
 
     def _from_value_fn(self, t: Type) -> list[str]:
         tg = self.tg
+        if isinstance(t, ArrayType):
+            name = tg.n.helper(tg.n.array_key(t), "of", builtin=True)
+            elem = self.from_value(Atom("f.get(k)"), t.elem).flat()
+            return [f"fn {name}(v: Option<&Value>) -> {tg.rtype(t)} {{", "    let f: &[Value] = match v {",
+                    "        Some(Value::Record(f)) => f,", "        _ => &[],", "    };", "    let mut a = num::Arr::default();",
+                    "    for (k, x) in a.0.iter_mut().enumerate() {", f"        *x = {elem};", "    }", "    a", "}"]
         if isinstance(t, EnumType):
             rt = tg.rtype(t)
             of = tg.n.helper(t.name, "of")
@@ -120,6 +147,10 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
             assert isinstance(t, RecordType)
             kind = Call("Kind::Record", [mp.fields(list(t.fields))])
         statics.append(assign(f"static {tg.n.type_desc(t.name)}: TypeDesc", "=", Struct("TypeDesc", [("name", _s(t.name)), ("kind", kind)]), 0))
+    for t in array_types(d):
+        # An array: its element type and length (the host prints it as `[...]`).
+        kind = Call("Kind::Array", [mp.type_ref(t.elem), Atom(str(t.size))])
+        statics.append(assign(f"static {mp.array_desc(t)}: TypeDesc", "=", Struct("TypeDesc", [("name", _s(str(t))), ("kind", kind)]), 0))
     types = [Atom(f"&{tg.n.type_desc(t.name)}", 11) for t in ordered_types(d)]
     statics.append(assign(f"static TYPES: [&TypeDesc; {len(types)}]", "=", Array(types), 0))
     consts = [Call("const_desc", [_s(k.name), mp.type_ref(k.type)]) for k in d.consts.values()]

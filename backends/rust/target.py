@@ -29,6 +29,7 @@ from rcsc.outputs.backend import BuildOptions, CtrlInfo, Target, base_cpu, cpu_t
 from rcsc.backends.rust.fmt import (
     P_POSTFIX,
     P_UNARY,
+    Array,
     Atom,
     Bin,
     Call,
@@ -45,7 +46,7 @@ from rcsc.backends.rust.fmt import (
     let,
     pad,
 )
-from rcsc.semantics.types import BOOL, DURATION, I64, U32, EnumType, FloatType, IntType, RecordType, Type
+from rcsc.semantics.types import BOOL, DURATION, I64, U32, ArrayType, EnumType, FloatType, IntType, RecordType, Type
 
 INT_NAME = {"i32": "i32", "i64": "i64", "u32": "u32", "duration": "i64"}
 WRAPPING = {"+": "wrapping_add", "-": "wrapping_sub", "*": "wrapping_mul"}
@@ -136,6 +137,8 @@ class RustTarget(Target):
             return "f64"
         if isinstance(t, (EnumType, RecordType)):
             return self.tname(t.name)
+        if isinstance(t, ArrayType):
+            return f"num::Arr<{self.rtype(t.elem)}, {t.size}>"
         raise ValueError(f"no Rust type for {t}")
 
     def period_const(self, cpu: str) -> str:
@@ -176,6 +179,8 @@ class RustTarget(Target):
             return Atom(f"{self.tname(t.name)}::{self.ident(str(value))}")
         if isinstance(t, RecordType):
             return Struct(self.tname(t.name), [(self.ident(n), self.literal(value[n], ft)) for n, ft in t.fields])
+        if isinstance(t, ArrayType):
+            return Call("num::Arr", [Array([self.literal(v, t.elem) for v in value])])
         raise ValueError(f"no Rust literal for {t}")
 
     def init_value(self, v: m.Var) -> Node:
@@ -189,6 +194,13 @@ class RustTarget(Target):
             return Atom(self.vname(e.name))
         if isinstance(e.type, (EnumType, RecordType)):
             self.uses.add("types")
+        if isinstance(e.type, ArrayType):
+            self.uses.add("num")
+            t = e.type.elem
+            while isinstance(t, ArrayType):
+                t = t.elem
+            if isinstance(t, (EnumType, RecordType)):
+                self.uses.add("types")
         return self.literal(e.value, e.type)
 
     def own(self) -> str:
@@ -267,6 +279,24 @@ class RustTarget(Target):
             obj = Paren(obj)
         return Atom(f"{obj.flat()}.{name}") if isinstance(obj, Atom) else FieldOf(obj, name)
 
+    def index64(self, e: m.Expr) -> Node:
+        """An array index as the i64 that `num::at`/`num::slot` take."""
+        v = self.expr(e)
+        return v if e.type == I64 else Call("i64::from", [v])
+
+    def index_expr(self, e: m.Index) -> Node:
+        """`a[i]`: the element, or the element type's zero outside 0..N-1 (`num::at`)."""
+        from rcsc.semantics.evaluate import zero_value
+
+        self.uses.add("num")
+        if isinstance(e.type, (EnumType, RecordType)):
+            self.uses.add("types")
+        return Call("num::at", [Unary("&", self.expr(e.obj)), self.index64(e.index), self.literal(zero_value(e.type), e.type)])
+
+    def arraylit_expr(self, e: m.ArrayLit) -> Node:
+        self.uses.add("num")
+        return Call("num::Arr", [Array([self.expr(x) for x in e.items])])
+
     def unary_expr(self, e: m.Unary) -> Node:
         v = self.expr(e.operand)
         if e.op == "not":
@@ -318,6 +348,11 @@ class RustTarget(Target):
         if e.func == "seconds":
             return Bin.make("/", Cast.make(args[0], "f64"), Atom("1e9"))
         is_float = isinstance(e.type, FloatType)
+        if e.func in ("sum", "min_of", "max_of"):
+            self.uses.add("num")
+            if e.func == "sum" or is_float:
+                return Call(f"num::{e.func}_{'f64' if is_float else INT_NAME[e.type.name]}", [Unary("&", args[0])])
+            return Call(f"num::{e.func}", [Unary("&", args[0])])
         if e.func == "abs":
             if e.type == U32:
                 return args[0]  # |x| of an unsigned value is x (and needs no `num`)
@@ -345,6 +380,20 @@ class RustTarget(Target):
     def assign_stmt(self, s: m.Assign, indent: int) -> list[str]:
         target = self.lvalue(s.target)
         value = self.expr(s.value)
+        if s.target.index is not None:
+            # `a[i] = v`: the value, then the index (the simulator's order); a
+            # write outside 0..N-1 is ignored (`num::slot` gives None).
+            self.uses.add("num")
+            t = s.target.type
+            if s.op == "=":
+                store = assign("*rcs_e", "=", Atom("rcs_x"), indent + 2)
+            elif t.name in INT_NAME:
+                store = assign("*rcs_e", "=", Call(f"{INT_NAME[t.name]}::{WRAPPING[s.op[0]]}", [Atom("*rcs_e"), Atom("rcs_x")]), indent + 2)
+            else:
+                store = assign("*rcs_e", s.op, Atom("rcs_x"), indent + 2)
+            return ([f"{pad(indent)}{{"] + let("rcs_x", value, indent + 1) + let("rcs_i", self.index64(s.target.index), indent + 1)
+                    + [f"{pad(indent + 1)}if let Some(rcs_e) = num::slot(&mut {target}, rcs_i) {{"] + store
+                    + [f"{pad(indent + 1)}}}", f"{pad(indent)}}}"])
         if s.op == "=" and isinstance(value, Atom) and value.text == target:
             # `x = x;` is legal in a design and does nothing; written in Rust
             # it is a dead_code warning and a clippy::self_assignment error.

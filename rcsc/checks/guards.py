@@ -290,6 +290,8 @@ def _is_fixed(key: tuple, c: m.Controller, assigned: set[tuple[str, str]]) -> bo
 def _vkey(v):
     if isinstance(v, dict):
         return tuple(sorted((k, _vkey(x)) for k, x in v.items()))
+    if isinstance(v, list):
+        return ("[]",) + tuple(_vkey(x) for x in v)
     if isinstance(v, float) and math.isnan(v):
         return ("nan",)
     return (type(v).__name__, v)
@@ -320,6 +322,10 @@ def _ekey(e: m.Expr):
         return ("b", e.op, str(e.type), _ekey(e.left), _ekey(e.right))
     if t is m.IfExpr:
         return ("if", _ekey(e.cond), _ekey(e.then), _ekey(e.else_))
+    if t is m.Index:
+        return ("[]", _ekey(e.obj), _ekey(e.index))
+    if t is m.ArrayLit:
+        return ("[,]", str(e.type), tuple(_ekey(x) for x in e.items))
     return ("?", t.__name__, id(e))  # unknown: equal only to itself
 
 
@@ -329,7 +335,8 @@ def _skey(jobs: list[m.Stmt]) -> tuple:
     for s in jobs:
         t = type(s)
         if t is m.Assign:
-            out.append(("=", s.target.kind, s.target.name, tuple(s.target.path), s.op, _ekey(s.value)))
+            index = None if s.target.index is None else _ekey(s.target.index)
+            out.append(("=", s.target.kind, s.target.name, tuple(s.target.path), index, s.op, _ekey(s.value)))
         elif t is m.CallStmt:
             out.append(("call", _ekey(s.call)))
         elif t is m.Command:

@@ -78,7 +78,7 @@ from fractions import Fraction
 import z3
 
 from rcsc.semantics import model as m
-from rcsc.semantics.types import BOOL, DURATION, I64, EnumType, ErrorType, FloatType, IntType, RecordType, Type
+from rcsc.semantics.types import BOOL, DURATION, I64, ArrayType, EnumType, ErrorType, FloatType, IntType, RecordType, Type
 
 VIEW_BASE = ("none", "executing", "done", "error")
 
@@ -124,6 +124,28 @@ class Rec:
 
     def values(self) -> list:
         return [self[name] for name, _ in self.rtype.fields]
+
+
+class Arr:
+    """An array value (bounded encoding): its elements, made on first use."""
+
+    def __init__(self, atype: ArrayType, make) -> None:
+        self.atype = atype
+        self._make = make
+        self._elems: dict[int, object] = {}
+
+    def __getitem__(self, i: int):
+        if i not in self._elems:
+            self._elems[i] = self._make(i)
+        return self._elems[i]
+
+    def values(self) -> list:
+        return [self[i] for i in range(self.atype.size)]
+
+
+# The longest array indexed by a value the solver chooses: `a[k]` is encoded
+# as `if k == 0 then a[0] elif ... else zero`, one case per element.
+MAX_SYMBOLIC_INDEX = 64
 
 
 @dataclass
@@ -355,6 +377,8 @@ class Encoder:
         """A variable of any type: records become a Rec of field inputs."""
         if isinstance(t, RecordType):
             return Rec(t, lambda f, key=key, name=name, t=t: self._var(key + (f,), f"{name}.{f}", t.field_type(f), t.field_range(f)))  # type: ignore[arg-type]
+        if isinstance(t, ArrayType):
+            return Arr(t, lambda i, key=key, name=name, t=t: self._var(key + (i,), f"{name}[{i}]", t.elem))
         if isinstance(t, ErrorType):
             raise HasTypeError("error type")
         return self._input(key, name, t, rng)
@@ -391,6 +415,8 @@ class Encoder:
             return z3.IntVal(t.members.index(value))
         if isinstance(t, RecordType):
             return Rec(t, lambda f: self.const(value[f], t.field_type(f)))  # type: ignore[arg-type]
+        if isinstance(t, ArrayType):
+            return Arr(t, lambda i: self.const(value[i], t.elem))
         raise Unsupported(f"constant of type {t}")
 
     def e_Const(self, e: m.Const, args):
@@ -462,6 +488,28 @@ class Encoder:
             raise Unsupported("field of a non-record")
         return obj[e.name]
 
+    def e_Index(self, e: m.Index, args):
+        """The element, or the element type's zero out of range (as every execution)."""
+        from rcsc.semantics.evaluate import zero_value
+
+        obj = self.expr(e.obj, args)
+        idx = self.expr(e.index, args)
+        if not isinstance(obj, Arr):
+            raise Unsupported("index of a non-array")
+        size = obj.atype.size
+        known = _int_numeral(idx)
+        if known is not None:
+            return obj[known] if 0 <= known < size else self.const(zero_value(e.type), e.type)
+        if size > MAX_SYMBOLIC_INDEX:
+            raise Unsupported("variable index into a long array")
+        out = self.const(zero_value(e.type), e.type)
+        for i in reversed(range(size)):
+            out = self.merge(idx == i, obj[i], out, e.type)
+        return out
+
+    def e_ArrayLit(self, e: m.ArrayLit, args):
+        return Arr(e.type, lambda i: self.expr(e.items[i], args))  # type: ignore[arg-type]
+
     def e_Unary(self, e: m.Unary, args):
         v = self.expr(e.operand, args)
         if e.op == "not":
@@ -484,6 +532,8 @@ class Encoder:
             return F(_ite(c, a.r, b.r), _ite(c, a.nan, b.nan))
         if isinstance(a, Rec):
             return Rec(a.rtype, lambda f: self.merge(c, a[f], b[f], a.rtype.field_type(f)))  # type: ignore[arg-type]
+        if isinstance(a, Arr):
+            return Arr(a.atype, lambda i: self.merge(c, a[i], b[i], a.atype.elem))
         return _ite(c, a, b)
 
     def e_Binary(self, e: m.Binary, args):
@@ -630,6 +680,17 @@ class Encoder:
             self.side.append(root >= 0)
             self.side.append(z3.Implies(x.r == 0, root == 0))
             return F(root, _or(x.nan, x.r < 0))
+        if name in ("sum", "min_of", "max_of"):
+            arr = vals[0]
+            if not isinstance(arr, Arr) or arr.atype.size > MAX_SYMBOLIC_INDEX:
+                raise Unsupported(f"builtin {name} of a long array")
+            acc = arr[0]
+            for i in range(1, arr.atype.size):
+                if name == "sum":
+                    acc = self.arith("+", acc, arr[i], t)
+                else:
+                    acc = self.builtin(name[:3], [acc, arr[i]], t, arg_exprs)
+            return acc
         raise Unsupported(f"builtin {name}")
 
     def convert(self, v, source: Type, target: Type):
@@ -712,7 +773,7 @@ def flatten(v) -> list:
     """The z3 terms of a value (records field by field, f64 as number and NaN flag)."""
     if isinstance(v, F):
         return [v.r, v.nan]
-    if isinstance(v, Rec):
+    if isinstance(v, (Rec, Arr)):
         out = []
         for x in v.values():
             out.extend(flatten(x))
@@ -770,6 +831,8 @@ def format_value(value, t: Type | None) -> str:
     if isinstance(value, dict) and isinstance(t, RecordType):
         inner = ", ".join(f"{n} = {format_value(value[n], ft)}" for n, ft in t.fields)
         return f"{t.name}({inner})"
+    if isinstance(value, list) and isinstance(t, ArrayType):
+        return "[" + ", ".join(format_value(v, t.elem) for v in value) + "]"
     return str(value)
 
 
@@ -781,4 +844,6 @@ def json_value(value, t: Type | None):
         return "NaN" if math.isnan(value) else ("inf" if value > 0 else "-inf")
     if isinstance(value, dict) and isinstance(t, RecordType):
         return {n: json_value(value[n], ft) for n, ft in t.fields}
+    if isinstance(value, list) and isinstance(t, ArrayType):
+        return [json_value(v, t.elem) for v in value]
     return value

@@ -23,6 +23,11 @@ W0524 value outside its declared range
 W0525 integer overflow or division by zero
     With the witness's inputs, `+`, `-` or `*` on an integer type wraps
     around, or `/` or `%` divides by zero (which gives 0).
+W0251 array index may be out of range
+    With the witness's inputs, an index (`a[i]` read, or `a[i] = v`
+    written) is outside 0..N-1: the read gives the element type's zero and
+    the write is ignored.  A path plan whose step rule is guarded by
+    `k < len(path)` (or `k >= len(path)` in an earlier rule) has none.
 """
 
 from __future__ import annotations
@@ -207,6 +212,15 @@ def _int_type(t: Type) -> IntType | None:
     return None
 
 
+def _array_size(design: Design, c: m.Controller, lv: m.LValue) -> int | None:
+    """The length of the array whose element the indexed assignment `lv` writes."""
+    var = {"gm": design.gm, "local": c.locals, "status": c.status_fields}[lv.kind].get(lv.name)
+    t = var.type if var is not None else None
+    for part in lv.path:
+        t = t.field_type(part) if isinstance(t, RecordType) else None
+    return getattr(t, "size", None)
+
+
 def _needs_solver(e: m.Expr) -> bool:
     for x in m.walk_expr(e):
         if isinstance(x, m.Binary) and x.op in ("+", "-", "*", "/", "%") and _int_type(x.type) is not None:
@@ -256,12 +270,19 @@ class _Plan:
 
             if r.guard is not None:
                 self._expr_checks(r.guard, contexts, r)
+                self._index_checks(r.guard, contexts, r)
             assigned: set[tuple[str, str]] = set()
             for job in r.jobs:
                 for e in m.stmt_exprs(job):
                     if _reads(e) & assigned:
                         continue
                     self._expr_checks(e, fired, r)
+                    self._index_checks(e, fired, r)
+                if (isinstance(job, m.Assign) and job.target.index is not None and not isinstance(job.target.index, m.Const)
+                        and not (_reads(job.target.index) & assigned)):
+                    size = _array_size(self.design, self.c, job.target)
+                    if size is not None:
+                        self._index_check(job.target.index, size, job.target.index.span, [job.target.index], fired, r, True)
                 if isinstance(job, m.Command):
                     self._command(job, fired, r, assigned)
                 elif isinstance(job, m.Assign):
@@ -333,6 +354,36 @@ class _Plan:
             parts.append(f"{inp.name} = {text}")
             out[inp.name] = value if not isinstance(value, float) or value == value else "NaN"
         return ", ".join(parts), out
+
+    def _index_checks(self, e: m.Expr, contexts: list[list], r: m.Rule) -> None:
+        for x in m.walk_expr(e):
+            if isinstance(x, m.Index) and not isinstance(x.index, m.Const):
+                size = x.obj.type.size  # type: ignore[attr-defined]
+                self._index_check(x.index, size, x.index.span, [], contexts, r, False)
+
+    def _index_check(self, index: m.Expr, size: int, span: Span, exprs: list[m.Expr], contexts: list[list], r: m.Rule, writing: bool) -> None:
+        """W0251: can `index` be outside 0..size-1 where rule `r` runs?"""
+        if (span.start, "index") in self.reported:
+            return
+        lo, hi = self._interval(index)
+        if 0 <= lo and hi < size:
+            return  # the declared ranges keep it inside
+        i = self._encode(index)
+        if i is None or isinstance(i, F):
+            return
+        model = self._ask(contexts, z3.Or(i < 0, i >= size), span, f"whether an index in rule `{r.label}` is out of range")
+        if model is None:
+            return
+        self.reported.add((span.start, "index"))
+        text, data = self._witness(model, exprs + [index] + ([r.guard] if r.guard is not None else []), r)
+        value = concrete(model, i, index.type)
+        effect = "the write is ignored" if writing else "the read gives the element type's zero value"
+        d = self.diags.add("W0251", span, f"the index in rule `{r.label}` may be {value}, outside the array of {size} elements", "may be out of range")
+        d.with_note(f"witness: {text}")
+        d.with_note(f"valid indices are 0..{size - 1}; out of range {effect}")
+        d.with_help(f"bound the index in the rule's condition (`k < {size}`, or an earlier rule `k >= len(...)`), or declare its range")
+        d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data, "state": self.where[self.hit][0],
+                  "size": size}
 
     def _expr_checks(self, e: m.Expr, contexts: list[list], r: m.Rule) -> None:
         if not _needs_solver(e):

@@ -91,6 +91,29 @@ class Call(Expr):
 
 
 @dataclass(slots=True)
+class Index(Expr):
+    """`obj[index]`: an element of a fixed-size array."""
+
+    obj: Expr
+    index: Expr
+
+
+@dataclass(slots=True)
+class ArrayLit(Expr):
+    """`[a, b, c]`."""
+
+    items: list[Expr]
+
+
+@dataclass(slots=True)
+class ArrayRepeat(Expr):
+    """`[value; count]`: `count` copies of `value`."""
+
+    value: Expr
+    count: Expr
+
+
+@dataclass(slots=True)
 class Unary(Expr):
     op: str  # "-" or "not"
     operand: Expr
@@ -124,6 +147,7 @@ class Assign(Stmt):
     target: list[Ident]  # a.b.c
     op: str  # = += -= *=
     value: Expr
+    index: Expr | None = None  # `a.b[i] = v`: the element of the array `a.b`
 
 
 @dataclass(slots=True)
@@ -154,9 +178,11 @@ class If(Stmt):
 
 @dataclass(slots=True)
 class TypeRef(Node):
-    name: Ident
+    name: Ident  # `[T; N]`: the span of the whole type, name "[]"
     lo: Expr | None = None
     hi: Expr | None = None
+    elem: "TypeRef | None" = None  # `[T; N]`: T
+    size: Expr | None = None  # `[T; N]`: N
 
 
 @dataclass(slots=True)

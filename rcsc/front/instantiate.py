@@ -334,6 +334,7 @@ class _StepCopier(_Copier):
         new.target = [ast.Ident(self.copy(head.span), self.inst.mangled(head.name)), *self.copy(node.target[1:])]
         new.op = node.op
         new.value = self.copy(node.value)
+        new.index = self.copy(node.index)  # `s[i] = v` in a step: an element of an array member
         depth = getattr(node, "depth", None)
         if depth is not None:
             new.depth = depth

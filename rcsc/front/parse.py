@@ -224,6 +224,12 @@ class _ToAst(Transformer_NonRecursive):
         return ast.TypeRef(self.span(meta), self.ident(name), lo, hi)
 
     @v_args(meta=True)
+    def array_type(self, meta, children):
+        elem, size = children
+        span = self.span(meta)
+        return ast.TypeRef(span, ast.Ident(span, "[]"), None, None, elem, size)
+
+    @v_args(meta=True)
     def const_decl(self, meta, children):
         name, type_, value = children
         return ast.Const(self.span(meta), self.ident(name), type_, value)
@@ -467,12 +473,15 @@ class _ToAst(Transformer_NonRecursive):
 
     @v_args(meta=True)
     def lvalue(self, meta, children):
-        return [self.ident(c) for c in children]
+        index = children[-1] if isinstance(children[-1], ast.Expr) else None
+        return [self.ident(c) for c in children if isinstance(c, Token)], index
 
     @v_args(meta=True)
     def assign(self, meta, children):
-        target, op, value = children
-        return self.nest(ast.Assign(self.span(meta), target, str(op), value), value)
+        (target, index), op, value = children
+        if index is None:
+            return self.nest(ast.Assign(self.span(meta), target, str(op), value), value)
+        return self.nest(ast.Assign(self.span(meta), target, str(op), value, index), value, index)
 
     @v_args(meta=True)
     def command(self, meta, children):
@@ -584,6 +593,21 @@ class _ToAst(Transformer_NonRecursive):
     @v_args(meta=True)
     def attr(self, meta, children):
         return self.nest(ast.Attr(self.span(meta), children[0], self.ident(children[1])), children[0])
+
+    @v_args(meta=True)
+    def index(self, meta, children):
+        obj, idx = children
+        return self.nest(ast.Index(self.span(meta), obj, idx), obj, idx)
+
+    @v_args(meta=True)
+    def array_lit(self, meta, children):
+        items = [c for c in children if c is not None]
+        return self.nest(ast.ArrayLit(self.span(meta), items), *items)
+
+    @v_args(meta=True)
+    def array_repeat(self, meta, children):
+        value, count = children
+        return self.nest(ast.ArrayRepeat(self.span(meta), value, count), value, count)
 
     @v_args(meta=True)
     def call(self, meta, children):

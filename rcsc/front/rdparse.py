@@ -171,6 +171,14 @@ class _Parser:
 
     def type_ref(self) -> ast.TypeRef:
         first = self.i
+        if self.toks[first] == "[":
+            self.i += 1
+            elem = self.type_ref()
+            self.expect(";")
+            size = self.expr()
+            self.expect("]")
+            span = self.span(first)
+            return ast.TypeRef(span, ast.Ident(span, "[]"), None, None, elem, size)
         name = self.name()
         lo = hi = None
         if self.toks[self.i] == "in":
@@ -571,6 +579,8 @@ class _Parser:
             return self.call_stmt(first, end=None)
         target = self.lvalue()
         tok = toks[self.i]
+        if tok == "[":
+            return self.assign(first, target, end=None, index=self.lvalue_index())
         if tok == "(" and len(target) == 2:
             self.i += 1
             args = self.args()
@@ -584,7 +594,14 @@ class _Parser:
             names.append(self.name())
         return names
 
-    def assign(self, first: int, target: list[ast.Ident], end: str | None) -> ast.Assign:
+    def lvalue_index(self) -> ast.Expr:
+        """`"[" expr "]"` after an lvalue's names."""
+        self.i += 1
+        index = self.expr()
+        self.expect("]")
+        return index
+
+    def assign(self, first: int, target: list[ast.Ident], end: str | None, index: ast.Expr | None = None) -> ast.Assign:
         op = self.toks[self.i]
         if op not in _ASSIGN_OPS:
             raise Fallback
@@ -592,6 +609,8 @@ class _Parser:
         value = self.expr()
         if end is not None:
             self.expect(end)
+        if index is not None:
+            return self.nest(ast.Assign(self.span(first), target, op, value, index), value, index)
         return self.nest1(ast.Assign(self.span(first), target, op, value), value)
 
     def call_stmt(self, first: int, end: str | None) -> ast.CallStmt:
@@ -625,7 +644,9 @@ class _Parser:
             return self.if_stmt()
         if toks[first + 1] == "(":
             return self.call_stmt(first, end=";")
-        return self.assign(first, self.lvalue(), end=";")
+        target = self.lvalue()
+        index = self.lvalue_index() if toks[self.i] == "[" else None
+        return self.assign(first, target, end=";", index=index)
 
     def if_stmt(self) -> ast.If:
         first = self.i
@@ -755,11 +776,21 @@ class _Parser:
                 node = ast.Name(self.tspan(first), tok)
         else:
             node = self.atom()
-        while toks[self.i] == ".":
-            self.i += 1
-            attr = self.name()
-            node = self.nest1(ast.Attr(self.span(first), node, attr), node)
-        return node
+        while True:
+            tok = toks[self.i]
+            if tok == ".":
+                self.i += 1
+                attr = self.name()
+                node = self.nest1(ast.Attr(self.span(first), node, attr), node)
+            elif tok == "[":
+                self.enter()
+                self.i += 1
+                index = self.expr()
+                self.expect("]")
+                self.recursion -= 1
+                node = self.nest2(ast.Index(self.span(first), node, index), node, index)
+            else:
+                return node
 
     def atom(self) -> ast.Expr:
         i = self.i
@@ -781,7 +812,33 @@ class _Parser:
             self.expect(")")
             self.recursion -= 1
             return inner
+        if tok == "[":
+            return self.array_lit()
         raise Fallback
+
+    def array_lit(self) -> ast.Expr:
+        """`[a, b, ...]` or `[value; count]`."""
+        first = self.i
+        toks = self.toks
+        self.enter()
+        self.i += 1
+        items: list[ast.Expr] = []
+        if toks[self.i] != "]":
+            items.append(self.expr())
+            if toks[self.i] == ";":
+                self.i += 1
+                count = self.expr()
+                self.expect("]")
+                self.recursion -= 1
+                return self.nest2(ast.ArrayRepeat(self.span(first), items[0], count), items[0], count)
+            while toks[self.i] == ",":
+                self.i += 1
+                if toks[self.i] == "]":
+                    break
+                items.append(self.expr())
+        self.expect("]")
+        self.recursion -= 1
+        return self.nest(ast.ArrayLit(self.span(first), items), *items)
 
     def float_lit(self, i: int) -> ast.FloatLit:
         span = self.tspan(i)

@@ -37,7 +37,7 @@ from rcsc.outputs import graph, safeio
 from rcsc.semantics import model as m
 from rcsc.checks.frames import fmt_ns
 from rcsc.diagnostics import Diagnostic, Severity
-from rcsc.semantics.types import DurationType, EnumType, RecordType, Type
+from rcsc.semantics.types import ArrayType, DurationType, EnumType, RecordType, Type
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 INDEX = "index.html"
@@ -186,6 +186,9 @@ def format_value(value: m.Value | None, t: Type | None) -> str:
         types = dict(t.fields) if isinstance(t, RecordType) else {}
         inner = ", ".join(f"{k} = {format_value(v, types.get(k))}" for k, v in value.items())
         return f"{t.name if t else ''}({inner})"
+    if isinstance(value, list):
+        elem = t.elem if isinstance(t, ArrayType) else None
+        return "[" + ", ".join(format_value(v, elem) for v in value) + "]"
     return str(value)
 
 

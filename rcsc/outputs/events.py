@@ -20,7 +20,7 @@ import struct
 
 from rcsc.front.scenario import Scenario
 from rcsc.semantics import model as m
-from rcsc.semantics.types import BoolType, DurationType, EnumType, FloatType, IntType, RecordType, Type
+from rcsc.semantics.types import ArrayType, BoolType, DurationType, EnumType, FloatType, IntType, RecordType, Type
 
 MAGIC = "rcsc-events"
 VERSION = 1
@@ -31,6 +31,8 @@ def _type_text(t: Type) -> str:
         return f"enum {t.name}{{{','.join(t.members)}}}"
     if isinstance(t, RecordType):
         return f"record {t.name}{{{','.join(f'{n}:{_type_text(ft)}' for n, ft in t.fields)}}}"
+    if isinstance(t, ArrayType):
+        return f"array [{_type_text(t.elem)}; {t.size}]"
     return t.name
 
 
@@ -53,12 +55,14 @@ def interface_hash(design: m.Design, ctrls: list[m.Controller]) -> str:
 
 
 def leaves(value, t: Type) -> list[str]:
-    """A value as its scalar leaves (records flattened in field order), each
+    """A value as its scalar leaves (records flattened in field order, arrays in index order), each
     the hex bit pattern of its type: bool 0/1, integers in two's complement
     of their width, f64 its IEEE-754 bits, duration i64 nanoseconds, enum the
     member's index."""
     if isinstance(t, RecordType):
         return [x for n, ft in t.fields for x in leaves(value[n], ft)]
+    if isinstance(t, ArrayType):
+        return [x for v in value for x in leaves(v, t.elem)]
     if isinstance(t, BoolType):
         bits = 1 if value else 0
     elif isinstance(t, IntType):

@@ -12,7 +12,7 @@ import operator
 
 from rcsc.semantics import model as m
 from rcsc.semantics import numeric
-from rcsc.semantics.types import BOOL, DURATION, F64, I64, FloatType, IntType, Type
+from rcsc.semantics.types import BOOL, DURATION, F64, I64, ArrayType, EnumType, FloatType, IntType, RecordType, Type
 
 
 class NotConstant(Exception):
@@ -63,6 +63,36 @@ def convert(value, source: Type, target: Type):
     if isinstance(source, FloatType):
         return numeric.float_to_int(value, target)
     return numeric.wrap(int(value), target)
+
+
+def zero_value(t: Type):
+    """The zero value of type `t`: false, 0, 0.0, the first enum member, a
+    record or array of zeros.  An out-of-range array read gives it."""
+    if t == BOOL:
+        return False
+    if isinstance(t, FloatType):
+        return 0.0
+    if isinstance(t, IntType) or t == DURATION:
+        return 0
+    if isinstance(t, EnumType):
+        return t.members[0] if t.members else ""
+    if isinstance(t, RecordType):
+        return {name: zero_value(ft) for name, ft in t.fields}
+    if isinstance(t, ArrayType):
+        return [zero_value(t.elem) for _ in range(t.size)]
+    return 0
+
+
+def _min(a, b, t: Type):
+    if t == F64:
+        return numeric.f64_min(a, b)  # NaN in, NaN out; min(-0.0, 0.0) is -0.0
+    return a if a <= b else b
+
+
+def _max(a, b, t: Type):
+    if t == F64:
+        return numeric.f64_max(a, b)
+    return a if a >= b else b
 
 
 def _arith(op: str, a, b, t: Type):
@@ -143,6 +173,29 @@ def _c_age(e):
 def _c_field(e):
     obj, name = _sub(e.obj), e.name
     return lambda env, a: obj(env, a)[name]
+
+
+def _c_index(e):
+    obj, idx = _sub(e.obj), _sub(e.index)
+    size = e.obj.type.size
+    zero = zero_value(e.type)
+    if isinstance(zero, (dict, list)):
+        from copy import deepcopy
+
+        return lambda env, a: _element(obj(env, a), idx(env, a), size, zero, deepcopy)
+    return lambda env, a: _element(obj(env, a), idx(env, a), size, zero, None)
+
+
+def _element(values, i, size, zero, copy):
+    """Element i of an array, or the element type's zero out of range."""
+    if 0 <= i < size:
+        return values[i]
+    return copy(zero) if copy is not None else zero
+
+
+def _c_array(e):
+    items = [_sub(x) for x in e.items]
+    return lambda env, a: [f(env, a) for f in items]
 
 
 def _c_unary(e):
@@ -227,6 +280,8 @@ _COMPILERS = {
     m.Binary: _c_binary,
     m.IfExpr: _c_if,
     m.Call: _c_call,
+    m.Index: _c_index,
+    m.ArrayLit: _c_array,
 }
 
 
@@ -255,13 +310,23 @@ def _call(e: m.Call, args: list, env: Env):
         if e.func == "seconds":
             return args[0] / 1e9
         if e.func in ("min", "max"):
-            a, b = args
-            if e.type == F64:
-                return (numeric.f64_min if e.func == "min" else numeric.f64_max)(a, b)
-            return (a if a <= b else b) if e.func == "min" else (a if a >= b else b)
+            return (_min if e.func == "min" else _max)(args[0], args[1], e.type)
         math_fn = _MATH.get(e.func)
         if math_fn is not None:
             return math_fn(*args)
+        if e.func in ("sum", "min_of", "max_of"):
+            # From the first element to the last, one operation at a time
+            # (the order the generated loops use: f64 sums are not associative).
+            values = args[0]
+            acc = values[0]
+            for v in values[1:]:
+                if e.func == "sum":
+                    acc = _arith("+", acc, v, e.type)
+                elif e.func == "min_of":
+                    acc = _min(acc, v, e.type)
+                else:
+                    acc = _max(acc, v, e.type)
+            return acc
         raise ValueError(e.func)
     if e.kind == "extern":
         return env.call_extern(e, args)

@@ -24,7 +24,7 @@ from rcsc.semantics.types import Type
 UNINITIALIZED, DONE, EXEC, ERROR = -1, 1, 2, 3
 FIRST_EXTRA_STATUS = 4
 
-Value = Union[bool, int, float, str, dict]  # enums are member names; records dicts
+Value = Union[bool, int, float, str, dict, list]  # enums are member names; records dicts; arrays lists
 
 
 # ---- expressions -------------------------------------------------------------
@@ -110,6 +110,21 @@ class Call(Expr):
 
 
 @dataclass(slots=True)
+class Index(Expr):
+    """`obj[index]`: an element of an array; out of range it is the element type's zero."""
+
+    obj: Expr
+    index: Expr
+
+
+@dataclass(slots=True)
+class ArrayLit(Expr):
+    """`[a, b, c]` with an element that is not constant (constant ones fold to a Const list)."""
+
+    items: list[Expr]
+
+
+@dataclass(slots=True)
 class Unary(Expr):
     op: str  # "-" or "not"
     operand: Expr
@@ -143,7 +158,8 @@ class LValue:
     kind: str  # gm | local | status
     name: str
     path: list[str]  # record fields below the variable
-    type: Type
+    type: Type  # the type of what is assigned (the element's, with `index`)
+    index: Expr | None = None  # `a[i] = v`: the element i of the array at `path` (ignored out of range)
 
 
 @dataclass(slots=True)
@@ -422,6 +438,11 @@ def walk_expr(e: Expr) -> list[Expr]:
             push(x.else_)
             push(x.then)
             push(x.cond)
+        elif t is Index:
+            push(x.index)
+            push(x.obj)
+        elif t is ArrayLit:
+            stack.extend(reversed(x.items))
         elif isinstance(x, (Binary, Field, Call, Unary, IfExpr)):  # pragma: no cover - a subclass
             raise TypeError(f"walk_expr: subclass {t.__name__} of a node class")
     return out
@@ -444,6 +465,8 @@ def stmt_exprs(s: Stmt):
     """The expressions directly held by one statement."""
     if isinstance(s, Assign):
         yield s.value
+        if s.target.index is not None:
+            yield s.target.index
     elif isinstance(s, CallStmt):
         yield s.call
     elif isinstance(s, Command):

@@ -20,7 +20,7 @@ from rcsc.front.instantiate import expand
 from rcsc.front.loader import LoadedFile
 from rcsc.front.source import Span
 from rcsc.semantics.typecheck import BUILTIN_FUNCS, CONVERSIONS, MATH_FUNCS, Checker, Globals, Scope
-from rcsc.semantics.types import BUILTIN_TYPES, DURATION, ERROR, I32, EnumType, ErrorType, RecordType, Type
+from rcsc.semantics.types import BUILTIN_TYPES, DURATION, ERROR, I32, EnumType, ErrorType, RecordType, Type, array_of
 
 _RESERVED = set(BUILTIN_TYPES) | set(BUILTIN_FUNCS) | set(MATH_FUNCS) | CONVERSIONS | {"cmd", "in_state", "seconds", "cycle"}
 
@@ -88,6 +88,11 @@ class _Sema:
                 self.g.types[name] = EnumType(name, tuple(members), item.span)
             elif isinstance(item, ast.Record):
                 self.record_ast[name] = item
+        # An array length in a record field may name a constant (`[f64; N]`):
+        # constants resolve lazily from here on.
+        for name, item in self.decls.items():
+            if isinstance(item, ast.Const):
+                self.const_ast[name] = item
         for name in self.record_ast:
             self._record(name)
 
@@ -111,6 +116,8 @@ class _Sema:
         return t
 
     def type_ref(self, ref: ast.TypeRef) -> Type:
+        if ref.elem is not None and ref.size is not None:
+            return self.array_type(ref)
         n = ref.name.name
         if n in self.g.types:
             return self.g.types[n]
@@ -119,6 +126,20 @@ class _Sema:
         diag = self.d.add("E0102", ref.name.span, f"unknown type `{n}`", "not a type")
         diag.with_note("types: bool, i32, i64, u32, f64, duration, and declared enums and records")
         return ERROR
+
+    def array_type(self, ref: ast.TypeRef) -> Type:
+        """`[T; N]`: N a positive integer literal or integer constant."""
+        assert ref.elem is not None and ref.size is not None
+        elem = self.type_ref(ref.elem)
+        if ref.elem.lo is not None:
+            self.d.add("E0254", ref.elem.span, "an array element cannot have a declared range", "range on an element").with_help(
+                "declare the range on a local that holds the element, or check the values in the plan"
+            )
+        checker = Checker(Scope(self.g, const_only=True), self.d)
+        size = checker.array_length(ref.size, "an array length")
+        if size is None or isinstance(elem, ErrorType):
+            return ERROR
+        return array_of(elem, size)
 
     def range_of(self, ref: ast.TypeRef, t: Type, checker: Checker) -> m.Range | None:
         if ref.lo is None or ref.hi is None:

@@ -30,6 +30,8 @@ from rcsc.semantics.types import (
     IntType,
     RecordType,
     Type,
+    ArrayType,
+    array_of,
     compatible,
 )
 
@@ -37,6 +39,14 @@ BUILTIN_FUNCS = {"abs": 1, "min": 2, "max": 2}
 # The f64 math built-ins (docs/language.md, "Math built-ins"): correctly
 # rounded, the same bits in the simulator, C and Rust (rcsc.semantics.numeric).
 MATH_FUNCS = {"sqrt": 1, "floor": 1, "ceil": 1, "trunc": 1, "round_even": 1, "copysign": 2}
+# Built-ins over a fixed-size array (one argument, the array): `len` is its
+# length (an i32 constant), `sum` adds the elements from the first to the
+# last, `min_of`/`max_of` fold `min`/`max` over them (NaN in, NaN out).
+# Distinct names from the scalar `min(a, b)`/`max(a, b)`.
+ARRAY_FUNCS = ("len", "sum", "min_of", "max_of")
+# The largest array length: every element is a row of the runtime's type
+# tables and a line of a literal in the generated code.
+MAX_ARRAY_LENGTH = 65536
 CONVERSIONS = {"i32", "i64", "u32", "f64"}
 ARITH_OPS = ("+", "-", "*", "/", "%")
 
@@ -129,7 +139,20 @@ def _may_fold(e: m.Expr) -> bool:
         return _known(e.cond)
     if isinstance(e, m.Call):
         return all(_known(a) for a in e.args)
+    if isinstance(e, m.Index):
+        return _known(e.obj) and _known(e.index)
+    if isinstance(e, m.ArrayLit):
+        return all(_known(a) for a in e.items)
     return True
+
+
+def _copy(value):
+    """A deep copy of a constant value (records are dicts, arrays lists)."""
+    if isinstance(value, dict):
+        return {k: _copy(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_copy(v) for v in value]
+    return value
 
 
 def describe(t: Type) -> str:
@@ -196,6 +219,127 @@ class Checker:
                 return None
             return m.Const(e.span, e.type, value)
         return e
+
+    def array_length(self, node: ast.Expr, what: str) -> int | None:
+        """A positive integer constant (an array's length or a repeat count), or None after a diagnostic."""
+        saved = self.s.const_only
+        self.s.const_only = True
+        try:
+            e = self.fold(self.expr(node))
+        finally:
+            self.s.const_only = saved
+        if isinstance(e.type, ErrorType):
+            return None
+        if not isinstance(e, m.Const) or not isinstance(e.type, IntType):
+            self.d.add("E0251", node.span, f"{what} must be an integer constant", "not an integer constant").with_help(
+                "write a literal (`[f64; 16]`) or the name of an integer constant (`[f64; N]`)"
+            )
+            return None
+        n = int(e.value)  # type: ignore[arg-type]
+        if n < 1:
+            self.d.add("E0250", node.span, f"{what} must be at least 1, not {n}", "empty array").with_note(
+                "an array (a path, a history) holds at least one element; a plan that may have nothing to do checks a count instead"
+            )
+            return None
+        if n > MAX_ARRAY_LENGTH:
+            self.d.add("E0251", node.span, f"{what} {n} is above the limit of {MAX_ARRAY_LENGTH}", "too long")
+            return None
+        return n
+
+    def _index_warning(self, index: m.Expr, t: ArrayType, span, writing: bool) -> None:
+        """W0250 when an index is a constant outside 0..size-1.  (An index that
+        only may be outside is W0251, asked of the solver with the rule's
+        condition: `rcsc.checks.values`.)"""
+        if isinstance(index, m.Const) and isinstance(index.value, int) and not isinstance(index.value, bool):
+            if not (0 <= index.value < t.size):
+                effect = "the write is ignored" if writing else f"the read gives the zero value of `{t.elem}`"
+                self.d.add("W0250", span, f"index {index.value} is outside the array of {t.size} elements", "out of range").with_note(
+                    f"valid indices are 0..{t.size - 1}; out of range {effect}"
+                )
+
+    def index_expr(self, node: ast.Expr) -> m.Expr:
+        idx = self.expr(node)
+        if isinstance(idx.type, ErrorType):
+            return idx
+        if not isinstance(idx.type, IntType):
+            self.d.add("E0253", node.span, f"an array index must be an integer, not `{idx.type}`", f"`{idx.type}`").with_help(
+                "convert it: `i32(x)`"
+            )
+            return m.Const(node.span, ERROR, 0)
+        return idx
+
+    def e_Index(self, node: ast.Index, expected: Type | None) -> m.Expr:
+        obj = self.expr(node.obj)
+        idx = self.index_expr(node.index)
+        if isinstance(obj.type, ErrorType) or isinstance(idx.type, ErrorType):
+            return m.Const(node.span, ERROR, 0)
+        if not isinstance(obj.type, ArrayType):
+            self.d.add("E0253", node.obj.span, f"`{obj.type}` is not an array", "cannot be indexed")
+            return m.Const(node.span, ERROR, 0)
+        self._index_warning(idx, obj.type, node.index.span, writing=False)
+        return self.fold(m.Index(node.span, obj.type.elem, obj, idx))
+
+    def e_ArrayLit(self, node: ast.ArrayLit, expected: Type | None) -> m.Expr:
+        if not node.items:
+            self.d.add("E0250", node.span, "an empty array literal", "no elements").with_note("an array holds at least one element")
+            return m.Const(node.span, ERROR, 0)
+        hint = expected.elem if isinstance(expected, ArrayType) else None
+        items = self.together(node.items, hint)
+        if any(isinstance(x.type, ErrorType) for x in items):
+            return m.Const(node.span, ERROR, 0)
+        elem = hint if hint is not None else items[0].type
+        for item, x in zip(node.items, items):
+            if not compatible(elem, x.type):
+                self.mismatch(item.span, elem, x.type, "an array's elements have one type")
+                return m.Const(node.span, ERROR, 0)
+        if isinstance(expected, ArrayType) and len(items) != expected.size:
+            self.d.add("E0252", node.span, f"array literal of {len(items)} elements where `{expected}` is expected", f"{len(items)} elements").with_help(
+                f"write {expected.size} elements, or `[value; {expected.size}]`"
+            )
+            return m.Const(node.span, ERROR, 0)
+        t = array_of(elem, len(items))
+        if len(items) > MAX_ARRAY_LENGTH:
+            self.d.add("E0251", node.span, f"an array literal of {len(items)} elements is above the limit of {MAX_ARRAY_LENGTH}", "too long")
+            return m.Const(node.span, ERROR, 0)
+        if all(isinstance(x, m.Const) for x in items):
+            return m.Const(node.span, t, [x.value for x in items])
+        return m.ArrayLit(node.span, t, items)
+
+    def e_ArrayRepeat(self, node: ast.ArrayRepeat, expected: Type | None) -> m.Expr:
+        hint = expected.elem if isinstance(expected, ArrayType) else None
+        value = self.fold(self.expr(node.value, hint))
+        if not isinstance(value, m.Const) and isinstance(value.type, (RecordType, ArrayType)):
+            try:  # a record built of constants (records are not folded)
+                value = m.Const(value.span, value.type, eval_expr(value, FoldEnv(self.g)))
+            except (NotConstant, TypeError, KeyError, ValueError, ArithmeticError):
+                pass
+        n = self.array_length(node.count, "the count of `[value; count]`")
+        if n is None or isinstance(value.type, ErrorType):
+            return m.Const(node.span, ERROR, 0)
+        if not isinstance(value, m.Const):
+            self.d.add("E0251", node.value.span, "the value of `[value; count]` must be a constant expression", "not constant").with_help(
+                "write the elements out (`[a, b, c]`), or fill the array in a `pre` block"
+            )
+            return m.Const(node.span, ERROR, 0)
+        if isinstance(expected, ArrayType) and n != expected.size and compatible(expected.elem, value.type):
+            self.d.add("E0252", node.span, f"array of {n} elements where `{expected}` is expected", f"{n} elements")
+            return m.Const(node.span, ERROR, 0)
+        return m.Const(node.span, array_of(value.type, n), [_copy(value.value) for _ in range(n)])
+
+    def _array_call(self, node: ast.Call, name: str) -> m.Expr:
+        args = self.match_args([("array", None)], node.args, node, f"`{name}`")
+        if args is None or isinstance(args[0].type, ErrorType):
+            return m.Const(node.span, ERROR, 0)
+        t = args[0].type
+        if not isinstance(t, ArrayType):
+            self.d.add("E0253", node.args[0].span, f"`{name}` needs an array, not `{t}`", "not an array")
+            return m.Const(node.span, ERROR, 0)
+        if name == "len":
+            return m.Const(node.span, I32, t.size)
+        if not (t.elem.is_numeric or t.elem == DURATION):
+            self.d.add("E0208", node.span, f"`{name}` is not defined for `{t}`", f"`{t.elem}` elements")
+            return m.Const(node.span, ERROR, 0)
+        return self.fold(m.Call(node.span, t.elem, "builtin", name, args))
 
     # ---- expressions -----------------------------------------------------------
 
@@ -498,6 +642,9 @@ class Checker:
         elif isinstance(lt, RecordType):
             self.d.add("E0208", node.op_span, f"`{op}` is not defined for records", "compare fields instead")
             return m.Const(node.span, ERROR, 0)
+        elif isinstance(lt, ArrayType):
+            self.d.add("E0254", node.op_span, f"`{op}` is not defined for arrays", "compare elements instead")
+            return m.Const(node.span, ERROR, 0)
         return self.fold(m.Binary(node.span, BOOL, op, left, right))
 
     def e_IfExpr(self, node: ast.IfExpr, expected: Type | None) -> m.Expr:
@@ -538,6 +685,8 @@ class Checker:
             if args is None or any(isinstance(a.type, ErrorType) for a in args):
                 return m.Const(node.span, ERROR, 0)
             return self.fold(m.Call(node.span, F64, "builtin", name, args))
+        if name in ARRAY_FUNCS and name not in self.g.functions and not self._is_variable(name):
+            return self._array_call(node, name)
         if name in BUILTIN_FUNCS and name not in self.g.functions:
             count = BUILTIN_FUNCS[name]
             params = [("x", None)] if count == 1 else [("a", None), ("b", None)]
@@ -662,7 +811,7 @@ class Checker:
             return m.If(node.span, branches, self.stmts(node.else_body or []))
         raise TypeError(type(node).__name__)
 
-    def lvalue(self, target: list[ast.Ident]) -> m.LValue | None:
+    def lvalue(self, target: list[ast.Ident], index: ast.Expr | None = None) -> m.LValue | None:
         head = target[0]
         n = head.name
         c = self.s.controller
@@ -704,16 +853,30 @@ class Checker:
                 return None
             path.append(ident.name)
             t = ft
-        return m.LValue(span, kind, n, path, t)
+        if index is None:
+            return m.LValue(span, kind, n, path, t)
+        idx = self.index_expr(index)
+        if isinstance(idx.type, ErrorType) or isinstance(t, ErrorType):
+            return None
+        if not isinstance(t, ArrayType):
+            self.d.add("E0253", span, f"`{t}` is not an array", "cannot be indexed")
+            return None
+        self._index_warning(idx, t, index.span, writing=True)
+        return m.LValue(span.to(index.span), kind, n, path, t.elem, idx)
 
     def assign(self, node: ast.Assign) -> m.Stmt | None:
-        lv = self.lvalue(node.target)
+        lv = self.lvalue(node.target, node.index)
         if lv is None:
             self.expr(node.value)  # still report problems inside the value
             return None
         value = self.expect(node.value, lv.type, f"assigned to `{'.'.join(i.name for i in node.target)}`")
         if node.op != "=":
             ok = lv.type.is_numeric or (lv.type == DURATION and node.op in ("+=", "-="))
+            if isinstance(lv.type, ArrayType):
+                self.d.add("E0254", node.span, f"`{node.op}` is not defined for arrays", "a whole array").with_help(
+                    "assign element by element: `a[i] += x`"
+                )
+                return None
             if not ok and not isinstance(lv.type, ErrorType):
                 self.d.add("E0208", node.span, f"`{node.op}` is not defined for `{lv.type}`", f"`{lv.type}`")
                 return None

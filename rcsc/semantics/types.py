@@ -98,6 +98,21 @@ class RecordType(Type):
         return hash(("record", self.name))
 
 
+@dataclass(frozen=True)
+class ArrayType(Type):
+    """`[elem; size]`: a fixed number (at least 1) of values of one type.
+
+    Values are Python lists; indexing outside 0..size-1 reads the element
+    type's zero value and a write there is ignored (docs/language.md §4)."""
+
+    elem: Type = None  # type: ignore[assignment]
+    size: int = 1
+
+
+def array_of(elem: Type, size: int) -> ArrayType:
+    return ArrayType(f"[{elem}; {size}]", elem, size)
+
+
 BOOL = BoolType("bool")
 I32 = IntType("i32", 32, True)
 I64 = IntType("i64", 64, True)

@@ -23,7 +23,7 @@ from rcsc.front.scenario import Scenario
 from rcsc.outputs import backend
 from rcsc.outputs.events import event_text
 from rcsc.semantics import model as m
-from rcsc.semantics.types import FloatType, RecordType, Type
+from rcsc.semantics.types import ArrayType, FloatType, RecordType, Type
 from rcsc.sim.runner import RunResult, evaluate_expectation
 from rcsc.sim.trace import CtrlSnapshot, Snapshot
 
@@ -90,6 +90,8 @@ def _value(v, t: Type):
     """A trace value as the simulator holds it."""
     if isinstance(t, RecordType):
         return {n: _value(v[n], ft) for n, ft in t.fields}
+    if isinstance(t, ArrayType):
+        return [_value(x, t.elem) for x in v]
     if isinstance(t, FloatType):
         return float(v)  # also "nan", "inf", "-inf"
     return v

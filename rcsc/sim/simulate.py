@@ -30,7 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from rcsc.semantics import model as m
-from rcsc.semantics.evaluate import Env, _arith, eval_expr
+from rcsc.semantics.evaluate import Env, _arith, eval_expr, zero_value  # noqa: F401  (zero_value: re-exported)
 from rcsc.semantics.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type, U32
 
 STATUS_NAMES = {m.UNINITIALIZED: "UNINITIALIZED", m.DONE: "DONE", m.EXEC: "EXEC", m.ERROR: "ERROR"}
@@ -38,9 +38,11 @@ SERIAL_MAX = U32.max
 
 
 def clone(value):
-    """A copy of a value: scalars are immutable, records (dicts) are copied deeply."""
+    """A copy of a value: scalars are immutable, records (dicts) and arrays (lists) are copied deeply."""
     if isinstance(value, dict):
         return {k: clone(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [clone(v) for v in value]
     return value
 
 
@@ -51,21 +53,6 @@ def clone_status(st: "StatusBuffer") -> "StatusBuffer":
 def next_serial(serial: int) -> int:
     """The serial after `serial`: wraps past 2^32-1 to 1, never 0 ("no command yet")."""
     return 1 if serial >= SERIAL_MAX else serial + 1
-
-
-def zero_value(t: Type):
-    """The value of type `t` that an extern returns when the simulator has no model of it."""
-    if t == BOOL:
-        return False
-    if isinstance(t, FloatType):
-        return 0.0
-    if isinstance(t, IntType) or t == DURATION:
-        return 0
-    if isinstance(t, EnumType):
-        return t.members[0] if t.members else ""
-    if isinstance(t, RecordType):
-        return {name: zero_value(ft) for name, ft in t.fields}
-    return 0
 
 
 @dataclass
@@ -355,6 +342,12 @@ class Simulator:
         for part in s.target.path:
             container[key] = clone(container[key])
             container, key = container[key], part
+        if s.target.index is not None:
+            i = eval_expr(s.target.index, env)
+            if not (0 <= i < len(container[key])):
+                return  # out of range: the write is ignored
+            container[key] = clone(container[key])
+            container, key = container[key], i
         if s.op != "=":
             value = _arith(s.op[0], container[key], value, s.target.type)
         container[key] = clone(value)

@@ -27,7 +27,7 @@ from rcsc.sim.simulate import Simulator
 
 if TYPE_CHECKING:
     from rcsc.sim.timebase import System
-from rcsc.semantics.types import BOOL, DURATION, EnumType, FloatType, IntType, RecordType, Type
+from rcsc.semantics.types import BOOL, DURATION, ArrayType, EnumType, FloatType, IntType, RecordType, Type
 
 
 @dataclass
@@ -86,6 +86,8 @@ def json_value(value, t: Type) -> str:
         return _json_str(str(value))
     if isinstance(t, RecordType):
         return "{" + ",".join(f"{_json_str(n)}:{json_value(value[n], ft)}" for n, ft in t.fields) + "}"
+    if isinstance(t, ArrayType):
+        return "[" + ",".join(json_value(v, t.elem) for v in value) + "]"
     return _json_str(str(value))
 
 
@@ -176,6 +178,9 @@ def _flatten(prefix: str, value, t: Type):
     if isinstance(t, RecordType):
         for n, ft in t.fields:
             yield from _flatten(f"{prefix}.{n}", value[n], ft)
+    elif isinstance(t, ArrayType):
+        for i, v in enumerate(value):
+            yield from _flatten(f"{prefix}[{i}]", v, t.elem)
     else:
         yield prefix, value, t
 

@@ -80,14 +80,14 @@ static size_t scalar_size(rcs_kind k) {
     case RCS_T_F64: return sizeof(double);
     case RCS_T_DURATION: return sizeof(int64_t);
     case RCS_T_ENUM: return sizeof(int32_t);
-    case RCS_T_RECORD: break;
+    case RCS_T_RECORD: case RCS_T_ARRAY: break;
     }
     return 0;
 }
 
 /* Bytes from the start of a value of type t to the end of its last scalar. */
 static size_t type_extent(const rcs_type *t) {
-    if (t->kind != RCS_T_RECORD) return scalar_size(t->kind);
+    if (!RCS_T_AGGREGATE(t)) return scalar_size(t->kind);
     size_t end = 0;
     for (size_t i = 0; i < t->n_fields; i++) {
         size_t e = t->fields[i].offset + type_extent(t->fields[i].type);
@@ -98,7 +98,7 @@ static size_t type_extent(const rcs_type *t) {
 
 /* Copies a value of type t scalar by scalar (records field by field). */
 static void copy_typed(const rcs_type *t, unsigned char *dst, const unsigned char *src) {
-    if (t->kind == RCS_T_RECORD) {
+    if (RCS_T_AGGREGATE(t)) {
         for (size_t i = 0; i < t->n_fields; i++)
             copy_typed(t->fields[i].type, dst + t->fields[i].offset, src + t->fields[i].offset);
     } else {
@@ -183,7 +183,7 @@ static int ev_index(ev_reader *r, size_t i, size_t n, const char *what, size_t *
 }
 
 static size_t count_leaves(const rcs_type *t) {
-    if (t->kind != RCS_T_RECORD) return 1;
+    if (!RCS_T_AGGREGATE(t)) return 1;
     size_t n = 0;
     for (size_t i = 0; i < t->n_fields; i++) n += count_leaves(t->fields[i].type);
     return n;
@@ -191,7 +191,7 @@ static size_t count_leaves(const rcs_type *t) {
 
 /* Stores the leaves w[*k], w[*k + 1], ... of a value of type t at dst. */
 static int ev_value(ev_reader *r, const rcs_type *t, unsigned char *dst, size_t *k) {
-    if (t->kind == RCS_T_RECORD) {
+    if (RCS_T_AGGREGATE(t)) {
         for (size_t i = 0; i < t->n_fields; i++)
             if (!ev_value(r, t->fields[i].type, dst + t->fields[i].offset, k)) return 0;
         return 1;
@@ -208,7 +208,7 @@ static int ev_value(ev_reader *r, const rcs_type *t, unsigned char *dst, size_t 
     case RCS_T_I32: case RCS_T_ENUM: { uint32_t u = (uint32_t)v; memcpy(dst, &u, sizeof u); break; }
     case RCS_T_U32: { uint32_t u = (uint32_t)v; memcpy(dst, &u, sizeof u); break; }
     case RCS_T_F64: case RCS_T_I64: case RCS_T_DURATION: memcpy(dst, &v, sizeof v); break;
-    case RCS_T_RECORD: break;
+    case RCS_T_RECORD: case RCS_T_ARRAY: break;
     }
     return 1;
 }
@@ -555,6 +555,14 @@ static void put_value(FILE *o, const rcs_type *t, const unsigned char *v) {
             fprintf(o, "%.17g", x);
         return;
     }
+    case RCS_T_ARRAY:
+        putc('[', o);
+        for (size_t i = 0; i < t->n_fields; i++) {
+            if (i) putc(',', o);
+            put_value(o, t->fields[i].type, v + t->fields[i].offset);
+        }
+        putc(']', o);
+        return;
     case RCS_T_RECORD:
         putc('{', o);
         for (size_t i = 0; i < t->n_fields; i++) {

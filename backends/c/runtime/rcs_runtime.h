@@ -23,8 +23,10 @@
 #include "rcs_shm.h"
 
 /* Storage of each kind: bool, int32_t, int64_t, uint32_t, double,
- * int64_t (nanoseconds), int32_t (member index), the record's struct. */
-typedef enum { RCS_T_BOOL, RCS_T_I32, RCS_T_I64, RCS_T_U32, RCS_T_F64, RCS_T_DURATION, RCS_T_ENUM, RCS_T_RECORD } rcs_kind;
+ * int64_t (nanoseconds), int32_t (member index), the record's struct, the
+ * array's struct (its `fields` are the elements, unnamed, in index order). */
+typedef enum { RCS_T_BOOL, RCS_T_I32, RCS_T_I64, RCS_T_U32, RCS_T_F64, RCS_T_DURATION, RCS_T_ENUM, RCS_T_RECORD, RCS_T_ARRAY } rcs_kind;
+#define RCS_T_AGGREGATE(t) ((t)->kind == RCS_T_RECORD || (t)->kind == RCS_T_ARRAY)
 
 typedef struct rcs_type rcs_type;
 

@@ -314,3 +314,81 @@ pub fn cycles_ns(now: u64, since: u64, period_ns: i64) -> i64 {
 pub fn step_number(cycle: u64, divider: u64) -> i64 {
     (cycle.wrapping_sub(1) / divider).wrapping_add(1) as i64
 }
+
+// ---- arrays ----
+
+/// A fixed-size array of the design (`[T; N]`): plain data, `Copy`, assigned
+/// by value.  A newtype only because the standard library's `Default` for
+/// `[T; N]` stops at N = 32; the buffers start from `Default`.
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub struct Arr<T, const N: usize>(pub [T; N]);
+
+impl<T: Copy + Default, const N: usize> Default for Arr<T, N> {
+    fn default() -> Self {
+        Arr([T::default(); N])
+    }
+}
+
+/// Element `i` of `a`, or `zero` (the element type's zero) outside 0..N-1.
+#[inline]
+pub fn at<T: Copy, const N: usize>(a: &Arr<T, N>, i: i64, zero: T) -> T {
+    usize::try_from(i)
+        .ok()
+        .and_then(|k| a.0.get(k))
+        .copied()
+        .unwrap_or(zero)
+}
+
+/// Element `i` of `a` to write, or None outside 0..N-1 (the write is ignored).
+#[inline]
+pub fn slot<T, const N: usize>(a: &mut Arr<T, N>, i: i64) -> Option<&mut T> {
+    usize::try_from(i).ok().and_then(move |k| a.0.get_mut(k))
+}
+
+/// `f` folded over the elements from the first to the last (N >= 1).
+#[inline]
+fn fold<T: Copy + Default, const N: usize>(a: &Arr<T, N>, f: impl Fn(T, T) -> T) -> T {
+    let mut it = a.0.iter().copied();
+    let first = it.next().unwrap_or_default();
+    it.fold(first, f)
+}
+
+#[inline]
+pub fn sum_f64<const N: usize>(a: &Arr<f64, N>) -> f64 {
+    fold(a, |s, x| s + x)
+}
+
+#[inline]
+pub fn sum_i32<const N: usize>(a: &Arr<i32, N>) -> i32 {
+    fold(a, i32::wrapping_add)
+}
+
+#[inline]
+pub fn sum_i64<const N: usize>(a: &Arr<i64, N>) -> i64 {
+    fold(a, i64::wrapping_add)
+}
+
+#[inline]
+pub fn sum_u32<const N: usize>(a: &Arr<u32, N>) -> u32 {
+    fold(a, u32::wrapping_add)
+}
+
+#[inline]
+pub fn min_of_f64<const N: usize>(a: &Arr<f64, N>) -> f64 {
+    fold(a, min_f64)
+}
+
+#[inline]
+pub fn max_of_f64<const N: usize>(a: &Arr<f64, N>) -> f64 {
+    fold(a, max_f64)
+}
+
+#[inline]
+pub fn min_of<T: Copy + Default + Ord, const N: usize>(a: &Arr<T, N>) -> T {
+    fold(a, core::cmp::min)
+}
+
+#[inline]
+pub fn max_of<T: Copy + Default + Ord, const N: usize>(a: &Arr<T, N>) -> T {
+    fold(a, core::cmp::max)
+}

@@ -45,6 +45,9 @@ pub enum Kind {
     Duration,
     Enum(&'static [&'static str]),
     Record(&'static [FieldDesc]),
+    /// An array: the element type and the length; its value is a
+    /// `Value::Record` of the elements in index order, printed as `[...]`.
+    Array(&'static TypeDesc, usize),
 }
 
 /// A type: "f64", ..., or the enum's / record's name.

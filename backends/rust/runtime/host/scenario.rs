@@ -89,6 +89,7 @@ impl Line<'_> {
 fn count_leaves(t: &TypeDesc) -> usize {
     match &t.kind {
         Kind::Record(fields) => fields.iter().map(|f| count_leaves(f.ty)).sum(),
+        Kind::Array(elem, n) => count_leaves(elem) * n,
         _ => 1,
     }
 }
@@ -99,6 +100,13 @@ fn value(line: &Line<'_>, t: &TypeDesc, k: &mut usize) -> Result<Value, ScnError
         let mut out = Vec::with_capacity(fields.len());
         for f in fields.iter() {
             out.push(value(line, f.ty, k)?);
+        }
+        return Ok(Value::Record(out));
+    }
+    if let Kind::Array(elem, n) = &t.kind {
+        let mut out = Vec::with_capacity(*n);
+        for _ in 0..*n {
+            out.push(value(line, elem, k)?);
         }
         return Ok(Value::Record(out));
     }
@@ -125,7 +133,7 @@ fn value(line: &Line<'_>, t: &TypeDesc, k: &mut usize) -> Result<Value, ScnError
         Kind::Duration => Value::Duration(i64::from_ne_bytes(v.to_ne_bytes())),
         Kind::F64 => Value::F64(f64::from_bits(v)),
         Kind::Enum(_) => Value::Enum(usize::try_from(v).unwrap_or(0)),
-        Kind::Record(_) => Value::Record(Vec::new()),
+        Kind::Record(_) | Kind::Array(..) => Value::Record(Vec::new()),
     })
 }
 

@@ -116,6 +116,18 @@ pub fn json_value(out: &mut String, value: &Value, ty: &TypeDesc) {
             Kind::Enum(members) => json_str(out, members.get(*i).copied().unwrap_or("?")),
             _ => json_str(out, &i.to_string()),
         },
+        Value::Record(values) if matches!(&ty.kind, Kind::Array(..)) => {
+            out.push('[');
+            if let Kind::Array(elem, _) = &ty.kind {
+                for (k, v) in values.iter().enumerate() {
+                    if k > 0 {
+                        out.push(',');
+                    }
+                    json_value(out, v, elem);
+                }
+            }
+            out.push(']');
+        }
         Value::Record(values) => {
             out.push('{');
             if let Kind::Record(fields) = &ty.kind {
