@@ -187,9 +187,6 @@ class DesignGen:
         # The math built-ins and `cycle` likewise: they wrap what the main
         # stream drew for an assignment, so a seed keeps its design otherwise.
         self.math_rng = random.Random(seed ^ 0xF10A7)
-        # Arrays too have a stream of their own: a local array per controller,
-        # read and written in an extra `post` block, indices out of range included.
-        self.arr_rng = random.Random(seed ^ 0xA44A)
 
     # ---- types and values ------------------------------------------------------------
 
@@ -469,63 +466,6 @@ class DesignGen:
                 lines.append(f"{indent}{self.assign(targets, scope)};")
         return lines
 
-    # ---- arrays (their own random stream) ---------------------------------------------
-
-    def _arr_literal(self, t: str) -> str:
-        a = self.arr_rng
-        if t == "bool":
-            return a.choice(["true", "false"])
-        if t in INT_TYPES:
-            lit = a.choice(INT_EDGES[t])
-        elif t == "f64":
-            lit = a.choice(FLOAT_EDGES + ["0.0 / 0.0", "1.0 / 0.0"])
-        else:
-            lit = a.choice(DURATIONS)
-        return f"({lit})" if lit.startswith("-") else lit
-
-    def array_local(self) -> tuple[str, str, int, str]:
-        """(name, element type, length, declaration line) of a local array."""
-        a = self.arr_rng
-        t, n = a.choice(SCALARS), a.randint(1, 5)
-        name = self.names.fresh("arr")
-        if a.random() < 0.5:
-            init = f"[{self._arr_literal(t)}; {n}]"
-        else:
-            init = "[" + ", ".join(self._arr_literal(t) for _ in range(n)) + "]"
-        return name, t, n, f"    local {name}: [{t}; {n}] = {init}"
-
-    def _index(self, n: int, scope: list[Var]) -> str:
-        a = self.arr_rng
-        ints = [v.name for v in scope if v.type == "i32"]
-        if ints and a.random() < 0.5:
-            v = a.choice(ints)
-            return a.choice([v, f"{v} % {n + 1}", f"{v} - {a.randint(0, 2)}"])
-        return str(a.randint(-1, n))  # one past the end and -1: out of range
-
-    def array_block(self, name: str, t: str, n: int, targets: list[Var], scope: list[Var]) -> list[str]:
-        """A `post` block that writes and reads the array `name` (defined out of range)."""
-        a = self.arr_rng
-        lines = ["    post {"]
-        values = [v.name for v in scope if v.type == t] or [self._arr_literal(t)]
-        for _ in range(a.randint(1, 3)):
-            k = a.random()
-            if k < 0.5:
-                lines.append(f"        {name}[{self._index(n, scope)}] = {a.choice(values)};")
-            elif k < 0.65 and t in NUM_TYPES:
-                lines.append(f"        {name}[{self._index(n, scope)}] += {a.choice(values)};")
-            elif k < 0.8:
-                lines.append(f"        {name} = [{self._arr_literal(t)}; {n}];")  # the repeated value is a constant
-            else:
-                lines.append(f"        {name} = [" + ", ".join(a.choice(values) for _ in range(n)) + "];")
-        outs = [v.name for v in targets if v.type == t]
-        if outs:
-            read = f"{name}[{self._index(n, scope)}]"
-            if t in NUM_TYPES and a.random() < 0.5:
-                read = f"{a.choice(['sum', 'min_of', 'max_of'])}({name})"
-            lines.append(f"        {a.choice(outs)} = {read};")
-        lines.append("    }")
-        return lines
-
     # ---- declarations ---------------------------------------------------------------
 
     def declare(self) -> None:
@@ -702,9 +642,6 @@ class DesignGen:
                 out.append(f"    status {v.name}: {v.type} = {self.literal(v.type)}")
             for v in c.locals:
                 out.append(f"    local {v.name}: {v.type} = {self.literal(v.type)}")
-            array = self.array_local() if self.arr_rng.random() < 0.5 else None
-            if array is not None:
-                out.append(array[3])
             targets = c.status + c.locals + c.writes
             scope = c.reads + targets
             for s in c.subs:  # the supervisor's view of a subordinate's status fields
@@ -714,8 +651,6 @@ class DesignGen:
                     out.append(f"    {block} {{")
                     out += self.block(targets, scope, "        ", r.randint(1, 4))
                     out.append("    }")
-            if array is not None:
-                out += self.array_block(array[0], array[1], array[2], targets, scope)
             for verb, params in c.verbs:
                 out += self.plan(c, verb, params, scope, targets)
             out.append("}")

@@ -30,6 +30,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from c_build import Builds, cargo_build, compile_c, first_difference, generate, gprbuild, reference_trace, run_main
+from rcsc.semantics.sema import RESERVED_NAMES
 from rcsc.outputs import naming as nm
 from rcsc.backends.c import headers
 from rcsc.backends.c.naming import C_KEYWORDS, HEADER_NAMES, CNames
@@ -293,7 +294,8 @@ def test_header_lists_cover_the_compilers_here(cc: str) -> None:
 
 # The design language's own words (a name cannot be one).
 _LANGUAGE = set(re.findall(r'"([a-z_]+)"', (ROOT / "grammar/rcs.lark").read_text())) - {"gm"}
-_POOL = [x for x in HOSTILE if x not in _LANGUAGE and x not in ("cmd", "in_state", "seconds", "abs", "min", "max", "i32", "i64", "u32", "f64", "bool", "duration")]
+# ... nor a built-in name (types, functions, `cmd`, `cycle`, ...: the checker's one list).
+_POOL = [x for x in HOSTILE if x not in _LANGUAGE and x not in RESERVED_NAMES]
 
 TEMPLATE = """design {D}
 

@@ -147,7 +147,25 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
             assert isinstance(t, RecordType)
             kind = Call("Kind::Record", [mp.fields(list(t.fields))])
         statics.append(assign(f"static {tg.n.type_desc(t.name)}: TypeDesc", "=", Struct("TypeDesc", [("name", _s(t.name)), ("kind", kind)]), 0))
-    for t in array_types(d):
+    described: set = set()  # the arrays the tables refer to (a local-only array has no descriptor)
+
+    def reach(t) -> None:
+        if isinstance(t, ArrayType):
+            described.add(t)
+            reach(t.elem)
+        elif isinstance(t, RecordType):
+            for _, ft in t.fields:
+                reach(ft)
+
+    for t in [k.type for k in d.consts.values()] + [v.type for v in d.gm.values()] + list(d.records.values()):
+        reach(t)
+    for c in ctrls:
+        for v in c.status_fields.values():
+            reach(v.type)
+        for verb in c.verbs.values():
+            for q in verb.params:
+                reach(q.type)
+    for t in [t for t in array_types(d) if t in described]:
         # An array: its element type and length (the host prints it as `[...]`).
         kind = Call("Kind::Array", [mp.type_ref(t.elem), Atom(str(t.size))])
         statics.append(assign(f"static {mp.array_desc(t)}: TypeDesc", "=", Struct("TypeDesc", [("name", _s(str(t))), ("kind", kind)]), 0))

@@ -84,8 +84,9 @@ def zero_value(t: Type):
 
 
 def _min(a, b, t: Type):
+    # f64: NaN if either is NaN, -0.0 below 0.0 (the scalar built-in's rule).
     if t == F64:
-        return numeric.f64_min(a, b)  # NaN in, NaN out; min(-0.0, 0.0) is -0.0
+        return numeric.f64_min(a, b)
     return a if a <= b else b
 
 
@@ -309,8 +310,10 @@ def _call(e: m.Call, args: list, env: Env):
             return math.fabs(v)
         if e.func == "seconds":
             return args[0] / 1e9
-        if e.func in ("min", "max"):
-            return (_min if e.func == "min" else _max)(args[0], args[1], e.type)
+        if e.func == "min":
+            return _min(args[0], args[1], e.type)
+        if e.func == "max":
+            return _max(args[0], args[1], e.type)
         math_fn = _MATH.get(e.func)
         if math_fn is not None:
             return math_fn(*args)

@@ -23,6 +23,8 @@ from rcsc.semantics.typecheck import BUILTIN_FUNCS, CONVERSIONS, MATH_FUNCS, Che
 from rcsc.semantics.types import BUILTIN_TYPES, DURATION, ERROR, I32, EnumType, ErrorType, RecordType, Type, array_of
 
 _RESERVED = set(BUILTIN_TYPES) | set(BUILTIN_FUNCS) | set(MATH_FUNCS) | CONVERSIONS | {"cmd", "in_state", "seconds", "cycle"}
+# The names a design cannot declare (E0101), for tools that generate designs.
+RESERVED_NAMES = frozenset(_RESERVED)
 
 
 def _doc(node) -> str:
