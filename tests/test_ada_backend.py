@@ -173,3 +173,28 @@ def test_ada_comments_are_one_printable_line() -> None:
 
     assert ada_comment("x > 1 // why\n   and\ty\r") == "x > 1 // why and y"
     assert ada_comment("é ∑ \x00 ok") == "? ? ? ok"
+
+
+def test_doc_comments_are_ada_comment_lines(tmp_path: Path) -> None:
+    """`///` before a controller heads both its files; before a rule, the rule's comment; printable ASCII only."""
+    generate(ROOT / "tests/mathfn/mathfn.rcs", "ada", tmp_path)
+    doc = "--  Steps every third cycle of its CPU. It has one plan, whose rule is documented too."
+    for ext in (".ads", ".adb"):
+        text = (tmp_path / f"mathfn_0_ctrl_0_slow{ext}").read_text(encoding="ascii")
+        assert text.splitlines()[1].startswith(doc), text[:300]
+    body = (tmp_path / "mathfn_0_ctrl_0_slow.adb").read_text(encoding="ascii").splitlines()
+    at = next(i for i, x in enumerate(body) if x.strip().startswith("--  T1 (mathfn.rcs:"))
+    assert body[at - 1].strip() == "--  Done at once. */ // \\ ??/ newline follows"
+    for p in tmp_path.glob("*.ad?"):
+        assert all(" " <= ch <= "~" for line in p.read_text(encoding="ascii").splitlines() for ch in line), p.name
+
+
+def test_math_builtins_use_the_bit_pattern_algorithms_not_ada_numerics(tmp_path: Path) -> None:
+    """Ada's Sqrt, 'Floor and 'Copy_Sign raise or differ on NaN, infinities and -0.0: Rcs_Num ports rcs_num.h instead."""
+    generate(ROOT / "tests/mathfn/mathfn.rcs", "ada", tmp_path)
+    runtime = (tmp_path / "rcs_num.adb").read_text(encoding="ascii")
+    for fn in ("Sqrt_F64", "Floor_F64", "Ceil_F64", "Trunc_F64", "Round_Even_F64", "Copysign_F64", "Min_F64", "Max_F64", "Step_Number"):
+        assert f"function {fn} " in runtime, fn
+    assert "Ada.Numerics" not in runtime and "'Floor" not in runtime and "'Copy_Sign" not in runtime
+    code = "".join(p.read_text(encoding="ascii") for p in tmp_path.glob("mathfn_0_ctrl_0_*.adb"))
+    assert "Rcs_Num.Round_Even_F64 (" in code and "Rcs_Num.Step_Number (Cycle, 3)" in code

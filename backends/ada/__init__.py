@@ -26,9 +26,9 @@ from rcsc.backends.c.tables import main_tables
 from rcsc.outputs.backend import (
     BuildOptions, CtrlInfo, OutFile, RuleStep, StateTest, Target, base_cpu, built_controllers, cpu_ticks, expr_key,
     impure_functions, initial_value, keeps_gm_stamps, lower_controller, ordered_types, plan_layout, register, schedule_of,
-    tests_state,
+    tests_state, types_with_arrays,
 )
-from rcsc.semantics.types import BOOL, DURATION, I32, U32, EnumType, FloatType, IntType, RecordType, Type
+from rcsc.semantics.types import BOOL, DURATION, I32, I64, U32, ArrayType, EnumType, FloatType, IntType, RecordType, Type
 from rcsc.sim.simulate import zero_value
 
 ADA_TYPE = {"bool": "Boolean", "i32": "Integer_32", "i64": "Integer_64", "u32": "Unsigned_32", "f64": "F64", "duration": "Integer_64"}
@@ -95,7 +95,10 @@ class AdaBackend(Target):
         externs = [f for f in d.functions.values() if f.extern]
         files.append(OutFile(f"{c.n.p}_externs.h", c.render("externs.h.j2", **common, protos=[c.prototype(f) + ";" for f in externs])))
         ctx = self.context()
-        files.append(OutFile(n.file(ctx["types_pkg"], ".ads"), self.render("types.ads.j2", **ctx, **self.types(ctrls))))
+        types = self.types(ctrls)
+        files.append(OutFile(n.file(ctx["types_pkg"], ".ads"), self.render("types.ads.j2", **ctx, **types)))
+        if any(a["folds"] for a in types["arrays"]):
+            files.append(OutFile(n.file(ctx["types_pkg"], ".adb"), self.render("types.adb.j2", **ctx, **types)))
         fns = [f for f in d.functions.values() if not f.extern]
         files.append(OutFile(n.file(ctx["functions_pkg"], ".ads"), self.render("functions.ads.j2", **ctx, fns=[self.function(f) for f in fns])))
         if fns:
@@ -139,10 +142,13 @@ class AdaBackend(Target):
 
     def types(self, ctrls: list[m.Controller]) -> dict:
         d, n = self.design, self.n
-        types = []
-        for t in ordered_types(d):
+        types, arrays = [], []
+        for t in types_with_arrays(d):
             if isinstance(t, EnumType):
                 types.append({"kind": "enum", "name": n.type(t.name), "members": [n.enum_member(t.name, x) for x in t.members]})
+            elif isinstance(t, ArrayType):
+                types.append({"kind": "array", "name": n.array_type(t), "last": t.size - 1, "elem": self.atype(t.elem)})
+                arrays.append(self.array_helpers(t))
             else:
                 assert isinstance(t, RecordType)
                 types.append({"kind": "record", "name": n.type(t.name), "fields": [self.decl(x, ft) for x, ft in t.fields]})
@@ -163,11 +169,25 @@ class AdaBackend(Target):
                 "cmd_member": n.buffer_member(c.name, "cmd"), "status_member": n.buffer_member(c.name, "status"),
             })
         return {
-            "types": types, "consts": consts, "gm": [self.decl(x, v.type) for x, v in d.gm.items()],
+            "types": types, "arrays": arrays, "consts": consts, "gm": [self.decl(x, v.type) for x, v in d.gm.items()],
             "gm_stamps": [n.member(x) for x in d.gm] if keeps_gm_stamps(d) else [],
             "periods": [f"{n.period(cpu.name)} : constant Integer_64 := {cpu.heartbeat_ns};" for cpu in d.cpus.values()],
             "buffers": buffers,
         }
+
+    def array_helpers(self, t: ArrayType) -> dict:
+        """An array type's element read (the element type's zero outside
+        0..N-1, as in the simulator) and, for numbers, `sum`, `min_of` and
+        `max_of` folded from the first element to the last."""
+        at, et = self.n.array_type(t), self.atype(t.elem)
+        out = {"getter": self.n.array_fn(t, "Get"), "type": at, "elem": et, "last": t.size - 1,
+               "zero": _strip(self.literal(zero_value(t.elem), t.elem)), "folds": []}
+        if t.elem.is_numeric or t.elem == DURATION:
+            suffix = SUFFIX[t.elem.name]
+            step = {"Sum": "S + A (K)" if suffix == "F64" else f"Add_{suffix} (S, A (K))",
+                    "Min_Of": f"Min_{suffix} (S, A (K))", "Max_Of": f"Max_{suffix} (S, A (K))"}
+            out["folds"] = [{"fn": self.n.array_fn(t, op), "step": x} for op, x in step.items()]
+        return out
 
     def decl(self, name: str, t: Type) -> str:
         return f"{self.n.member(name)} : {self.atype(t)};"
@@ -175,13 +195,15 @@ class AdaBackend(Target):
     def atype(self, t: Type) -> str:
         if isinstance(t, (EnumType, RecordType)):
             return self.n.type(t.name)
+        if isinstance(t, ArrayType):
+            return self.n.array_type(t)
         return ADA_TYPE[t.name]
 
     def function(self, f: m.Function) -> dict:
         params = "; ".join(f"{self.n.member(q.name)} : {self.atype(q.type)}" for q in f.params)
         spec = f"function {self.n.function(f.name)}{f' ({params})' if params else ''} return {self.atype(f.ret)}"
         used = {e.name for e in m.walk_expr(f.body) if isinstance(e, m.Ref) and e.kind == "arg"} if f.body is not None else set()
-        return {"spec": spec, "where": self.where_text(f.span), "name": self.n.function(f.name),
+        return {"spec": spec, "where": self.where_text(f.span), "doc": ada_comment(f.doc), "name": self.n.function(f.name),
                 "unused": [self.n.member(q.name) for q in f.params if q.name not in used],
                 "body": self.expr(f.body) if f.body is not None else "", "zero": self.literal(zero_value(f.ret), f.ret)}
 
@@ -215,6 +237,11 @@ class AdaBackend(Target):
         if isinstance(t, RecordType):
             inner = ", ".join(f"{self.n.member(x)} => {self.literal(value[x], ft)}" for x, ft in t.fields) or "Unused => 0"
             return f"{self.n.type(t.name)}'({inner})"
+        if isinstance(t, ArrayType):
+            items = [self.literal(v, t.elem) for v in value]
+            if len(set(items)) == 1:
+                return f"{self.n.array_type(t)}'(others => {_strip(items[0])})"
+            return f"{self.n.array_type(t)}'({', '.join(f'{i} => {_strip(x)}' for i, x in enumerate(items))})"
         raise ValueError(f"no Ada literal for {t}")
 
     # ---- expressions ---------------------------------------------------------------
@@ -252,6 +279,10 @@ class AdaBackend(Target):
     def age_expr(self, e: m.Age) -> str:
         return self.age_of(f"Buf.Gm_Stamp.{self.n.member(e.name)}")
 
+    def cycle_expr(self, e: m.Cycle) -> str:
+        assert self.info is not None
+        return f"Rcs_Num.Step_Number (Cycle, {max(1, self.info.c.divider)})"
+
     def instate_expr(self, e: m.InState) -> str:
         assert self.info is not None
         return f"Rcs_Num.Cycles_Ns (Cycle, Entry_Cycle, {self.n.period(self.info.c.cpu or '')})"
@@ -276,6 +307,19 @@ class AdaBackend(Target):
         if not isinstance(e.obj, (m.Ref, m.Field, m.SubView)) or (isinstance(e.obj, m.Ref) and e.obj.kind == "arg"):
             obj = f"{self.atype(e.obj.type)}'({_strip(obj)})"  # a qualified expression is a name
         return f"{obj}.{self.n.member(e.name)}"
+
+    def index64(self, e: m.Expr) -> str:
+        """An array index as the Integer_64 the helpers take."""
+        v = _strip(self.expr(e))
+        return v if e.type in (I64, DURATION) else f"Rcs_Num.{SUFFIX[e.type.name]}_To_I64 ({v})"
+
+    def index_expr(self, e: m.Index) -> str:
+        """`a[i]`: the element, or the element type's zero when i is outside 0..N-1 (Get_...)."""
+        return f"{self.n.array_fn(e.obj.type, 'Get')} ({_strip(self.expr(e.obj))}, {self.index64(e.index)})"
+
+    def arraylit_expr(self, e: m.ArrayLit) -> str:
+        items = ", ".join(f"{i} => {_strip(self.expr(x))}" for i, x in enumerate(e.items))
+        return f"{self.atype(e.type)}'({items})"
 
     def unary_expr(self, e: m.Unary) -> str:
         v = self.expr(e.operand)
@@ -330,10 +374,14 @@ class AdaBackend(Target):
             return f"Rcs_Num.To_F64 ({args[0]})" if d == "F64" else f"Rcs_Num.{s}_To_{d} ({args[0]})"
         if e.func == "seconds":
             return f"(Rcs_Num.To_F64 ({args[0]}) / F64'(1.0E+09))"
+        if e.func in ("sum", "min_of", "max_of"):
+            op = "_".join(w.capitalize() for w in e.func.split("_"))
+            return f"{self.n.array_fn(e.args[0].type, op)} ({args[0]})"
         suffix = SUFFIX[e.type.name]
         if e.func == "abs" and suffix == "F64":
             return f"(abs {self.expr(e.args[0])})"
-        return f"Rcs_Num.{e.func.capitalize()}_{suffix} ({', '.join(args)})"
+        func = "_".join(w.capitalize() for w in e.func.split("_"))  # round_even -> Round_Even
+        return f"Rcs_Num.{func}_{suffix} ({', '.join(args)})"
 
     # ---- statements ----------------------------------------------------------------
 
@@ -344,6 +392,19 @@ class AdaBackend(Target):
     def assign_stmt(self, s: m.Assign, indent: int) -> list[str]:
         pad = "   " * indent
         target, value = self.lvalue(s.target), _strip(self.expr(s.value))
+        if s.target.index is not None:
+            # `a[i] = v`: the value, then the index (the simulator's order); a
+            # write outside 0..N-1 is ignored.  Same_I64: no constant condition.
+            t, elem = s.target.type, f"{target} (Rcs_I)"
+            if s.op == "=":
+                store = f"{elem} := Rcs_X;"
+            elif t.name in ("i32", "i64", "u32", "duration"):
+                store = f"{elem} := Rcs_Num.{ARITH[s.op[0]]}_{SUFFIX[t.name]} ({elem}, Rcs_X);"
+            else:
+                store = f"{elem} := {elem} {s.op[0]} Rcs_X;"
+            return [f"{pad}declare", f"{pad}   Rcs_X : constant {self.atype(t)} := {value};",
+                    f"{pad}   Rcs_I : constant Integer_64 := Rcs_Num.Same_I64 ({self.index64(s.target.index)});",
+                    f"{pad}begin", f"{pad}   if Rcs_I in {target}'Range then", f"{pad}      {store}", f"{pad}   end if;", f"{pad}end;"]
         if s.op == "=":
             if value == target:  # `x = x` is legal in a design, and does nothing; GNAT warns of it
                 return [f"{pad}null; --  {self.comment(target)} := itself"]
@@ -402,7 +463,7 @@ class AdaBackend(Target):
         pre, post = self.stmts(c.pre, 1), self.stmts(c.post, 1)
         gm_stamps = [f"Buf.Gm_Stamp.{n.member(u.name)} := {self.tick()};" for u in c.writes] if keeps_gm_stamps(self.design) else []
         ctx = {
-            "pkg": n.ctrl_package(c.name), "name": ada_comment(c.name), "kind": "simulator" if c.simulator else "controller",
+            "pkg": n.ctrl_package(c.name), "name": ada_comment(c.name), "doc": ada_comment(c.doc), "kind": "simulator" if c.simulator else "controller",
             "level": c.level, "where": self.where_text(c.span), "budget_ns": c.budget_ns, "symbol": f"rcs_ada_step_{index}",
             "own": self.own_of(c.name), "cmd": f"Buf.{n.buffer_member(c.name, 'cmd')}",
             "subs": subs, "locals": [self.decl(x, v.type) for x, v in c.locals.items()], "init": init,
@@ -422,7 +483,7 @@ class AdaBackend(Target):
         self.verb = plan.verb
         layout = plan_layout(plan, self.impure)
         body = self.layout(layout)
-        return {"fn": self.n.plan_fn(plan.verb), "verb": ada_comment(plan.verb), "verb_const": self.n.verb(c.name, plan.verb),
+        return {"fn": self.n.plan_fn(plan.verb), "verb": ada_comment(plan.verb), "doc": ada_comment(plan.doc), "verb_const": self.n.verb(c.name, plan.verb),
                 "where": self.where_text(plan.span), "continuous": plan.continuous, "needs_state": tests_state(layout),
                 "body": body, "uses_cycle": any(re.search(r"\bCycle\b", x) for x in body)}
 
@@ -478,7 +539,8 @@ class AdaBackend(Target):
             body += [f"{own}.Head.Status := Rcs_Num.Error;", f"{own}.Head.Error_Code := {self.literal(nxt.code, I32)};",
                      f"{own}.Head.State := St_Error;", "Plan := 0;"]
         guard = "otherwise" if r.guard is None else self.comment(r.guard_span.text)
-        head = [f"--  {r.label} ({self.where_text(r.span)}): {guard} | {self.comment(str(r.state))} -> {self.comment(r.next.span.text)}"]
+        head = [f"--  {self.comment(r.doc)}"] if r.doc else []
+        head.append(f"--  {r.label} ({self.where_text(r.span)}): {guard} | {self.comment(str(r.state))} -> {self.comment(r.next.span.text)}")
         if not cond:
             return head + body + ["return;"]
         return head + [f"if {cond} then"] + ["   " + x for x in body] + ["   return;", "end if;"]

@@ -94,6 +94,22 @@ class AdaNames:
     def function(self, f: str) -> str:
         return self.join("F", self.frag(f))
 
+    def _type_key(self, t) -> tuple[str, ...]:
+        """A type as name parts: a built-in's name, a declared type's fragment,
+        `A, <element>, <length>` for an array (no design name contains `_0`)."""
+        elem = getattr(t, "elem", None)
+        if elem is not None:
+            return ("A", *self._type_key(elem), str(t.size))
+        return (t.name.capitalize(),) if t.name in ("bool", "i32", "i64", "u32", "f64", "duration") else (self.frag(t.name),)
+
+    def array_type(self, t) -> str:
+        """The Ada array type of an array type of the design (`A_0_F64_0_16`)."""
+        return self.join(*self._type_key(t))
+
+    def array_fn(self, t, op: str) -> str:
+        """An array type's helper: `Get` (element or zero), `Sum`, `Min_Of`, `Max_Of`."""
+        return self.join(op, *self._type_key(t))
+
     def enum_member(self, t: str, x: str) -> str:
         return self.join("M", self.frag(t), self.frag(x))
 

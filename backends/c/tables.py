@@ -8,6 +8,8 @@ templates/main.c.j2.
 
 from __future__ import annotations
 
+import re
+
 from rcsc.semantics import model as m
 from rcsc.outputs.backend import cpu_gm, cpu_ticks, keeps_gm_stamps, ordered_types, types_with_arrays
 from rcsc.outputs.events import interface_hash
@@ -140,7 +142,7 @@ def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: li
             "row": "{" + ", ".join(row) + "},",
         })
     gm_stamps = [f"offsetof({tg.n.fixed('buffers')}, gm_stamp.{tg.ident(n)})," for n in d.gm] if keeps_gm_stamps(d) else []
-    return {
+    out = {
         "events_hash": c_string(interface_hash(d, ctrls)),
         "multi": multi_tables(tg, cpu, ctrls) if len(d.cpus) > 1 else None,
         "gm_stamps": gm_stamps,
@@ -154,6 +156,19 @@ def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: li
         "schedule": ", ".join(f"{index[c.name]}u" for c in schedule),
         "n_schedule": len(schedule),
     }
+    # An array type that only a local, a parameter of a function or an
+    # expression has is in no row: its descriptor would be an unused static
+    # (-Wunused-const-variable).  Drop those, the ones only they use included.
+    arrays = {t["decl"].split(" = ")[0].split()[-1]: t for t in types if "RCS_T_ARRAY" in t["decl"]}
+    while True:
+        rest = repr({k: v for k, v in out.items() if k != "types"}) + repr([t for t in types if t["decl"] not in {a["decl"] for a in arrays.values()}])
+        rest += repr([a["arrays"] for a in arrays.values()])
+        unused = [name for name in arrays if not re.search(rf"&{name}\b", rest)]
+        if not unused:
+            break
+        for name in unused:
+            types.remove(arrays.pop(name))
+    return out
 
 
 def multi_tables(tg: CTarget, cpu: m.Cpu, ctrls: list[m.Controller]) -> dict:

@@ -65,6 +65,131 @@ package body Rcs_Num with SPARK_Mode is
    function I64_To_U32 (V : Integer_64) return Unsigned_32 is
      (Unsigned_32 (To_U64 (V) and 16#FFFF_FFFF#));
 
+   function Step_Number (Cycle, Divider : Unsigned_64) return Integer_64 is
+     (To_I64 ((Cycle - 1) / Divider + 1));
+
+   ---- the math built-ins ----
+
+   function Bits is new Ada.Unchecked_Conversion (F64, Unsigned_64);
+   function Of_Bits is new Ada.Unchecked_Conversion (Unsigned_64, F64);
+   Sign : constant Unsigned_64 := 16#8000_0000_0000_0000#;
+   Mant : constant Unsigned_64 := 16#000F_FFFF_FFFF_FFFF#;
+   Hidden : constant Unsigned_64 := 16#0010_0000_0000_0000#;
+
+   function Quiet_NaN return F64 is (Of_Bits (16#7FF8_0000_0000_0000#));
+   --  The unbiased exponent of X's encoding.
+   function Exponent (B : Unsigned_64) return Integer is (Integer (Shift_Right (B, 52) and 16#7FF#) - 1023);
+
+   function Min_F64 (A, B : F64) return F64 is
+     (if Is_NaN (A) or else Is_NaN (B) then Quiet_NaN
+      elsif A = B then Of_Bits (Bits (A) or Bits (B)) --  -0.0 if either is
+      elsif A < B then A else B);
+   function Max_F64 (A, B : F64) return F64 is
+     (if Is_NaN (A) or else Is_NaN (B) then Quiet_NaN
+      elsif A = B then Of_Bits (Bits (A) and Bits (B)) --  0.0 if either is
+      elsif A > B then A else B);
+   function Copysign_F64 (X, Y : F64) return F64 is
+     (Of_Bits ((Bits (X) and not Sign) or (if Is_NaN (Y) then 0 else Bits (Y) and Sign)));
+
+   function Trunc_F64 (X : F64) return F64 is
+      B : constant Unsigned_64 := Bits (X);
+      E : constant Integer := Exponent (B);
+   begin
+      if E >= 52 then
+         return X; --  integral, inf or NaN
+      elsif E < 0 then
+         return Of_Bits (B and Sign); --  |X| < 1: zero of X's sign
+      else
+         return Of_Bits (B and not (Shift_Left (1, 52 - E) - 1));
+      end if;
+   end Trunc_F64;
+
+   --  T - 1.0 and T + 1.0 are exact (T is a whole number below 2**52).
+   function Floor_F64 (X : F64) return F64 is
+      T : constant F64 := Trunc_F64 (X);
+   begin
+      return (if X < T then T - 1.0 else T);
+   end Floor_F64;
+
+   function Ceil_F64 (X : F64) return F64 is
+      T : constant F64 := Trunc_F64 (X);
+   begin
+      return (if X > T then T + 1.0 else T);
+   end Ceil_F64;
+
+   function Round_Even_F64 (X : F64) return F64 is
+      B : constant Unsigned_64 := Bits (X);
+      E : constant Integer := Exponent (B);
+   begin
+      if E >= 52 then
+         return X;
+      elsif E < -1 then
+         return Of_Bits (B and Sign); --  |X| < 0.5
+      elsif E = -1 then --  0.5 <= |X| < 1: 0.5 ties to 0, the rest rounds to 1
+         return Of_Bits ((B and Sign) or (if (B and Mant) /= 0 then 16#3FF0_0000_0000_0000# else 0));
+      end if;
+      declare
+         Fb : constant Natural := 52 - E; --  1 .. 52 fraction bits
+         Mask : constant Unsigned_64 := Shift_Left (1, Fb) - 1;
+         Half : constant Unsigned_64 := Shift_Left (1, Fb - 1);
+         Frac : constant Unsigned_64 := B and Mask;
+         Odd : constant Boolean := E = 0 or else (Shift_Right (B, Fb) and 1) /= 0;
+         R : Unsigned_64 := B and not Mask;
+      begin
+         if Frac > Half or else (Frac = Half and then Odd) then
+            R := R + Shift_Left (1, Fb); --  carries into the exponent
+         end if;
+         return Of_Bits (R);
+      end;
+   end Round_Even_F64;
+
+   --  Correctly rounded square root: the 54-bit integer root (53 bits and a
+   --  guard bit) of the significand, one bit per step, then round to nearest even.
+   function Sqrt_F64 (X : F64) return F64 is
+      B, M : Unsigned_64;
+      R, Q, T, Two, Guard : Unsigned_64 := 0;
+      E : Integer;
+   begin
+      if Is_NaN (X) or else X < 0.0 then
+         return Quiet_NaN;
+      elsif X = 0.0 or else X > F64'Last then
+         return X; --  +-0.0, +inf
+      end if;
+      B := Bits (X);
+      E := Integer (Shift_Right (B, 52) and 16#7FF#);
+      M := B and Mant;
+      if E = 0 then --  subnormal: normalise
+         E := 1;
+         while (M and Hidden) = 0 loop
+            M := Shift_Left (M, 1);
+            E := E - 1;
+         end loop;
+      else
+         M := M or Hidden;
+      end if;
+      E := E - 1023; --  X = M * 2**(E - 52)
+      if E rem 2 /= 0 then
+         M := Shift_Left (M, 1);
+         E := E - 1;
+      end if;
+      for I in reverse 0 .. 53 loop
+         Two := (if 2 * I >= 54 then Shift_Right (M, 2 * I - 54) and 3 else 0);
+         R := Shift_Left (R, 2) or Two;
+         T := Shift_Left (Q, 2) or 1;
+         Q := Shift_Left (Q, 1);
+         if R >= T then
+            R := R - T;
+            Q := Q or 1;
+         end if;
+      end loop;
+      Guard := Q and 1;
+      Q := Shift_Right (Q, 1);
+      if Guard /= 0 and then (R /= 0 or else (Q and 1) /= 0) then
+         Q := Q + 1;
+      end if;
+      return Of_Bits (Shift_Left (Unsigned_64 (E / 2 + 1023), 52) + Q - Hidden);
+   end Sqrt_F64;
+
    function Cycles_Ns (Now, Since : Unsigned_64; Period_Ns : Integer_64) return Integer_64 is
      (Mul_I64 (To_I64 (Now - Since), Period_Ns));
 

@@ -89,10 +89,23 @@ package Rcs_Num with SPARK_Mode, Pure is
    function Inf return F64;
    function NaN return F64;
    function Is_NaN (X : F64) return Boolean is (X /= X);
-   function Min_F64 (A, B : F64) return F64 is
-     (if Is_NaN (A) or else Is_NaN (B) then A + B elsif A <= B then A else B);
-   function Max_F64 (A, B : F64) return F64 is
-     (if Is_NaN (A) or else Is_NaN (B) then A + B elsif A >= B then A else B);
+
+   --  The math built-ins, bit for bit as the reference simulator: integer
+   --  algorithms on the IEEE-754 encoding (Long_Float <-> Unsigned_64), not
+   --  Ada's Sqrt, Copy_Sign or 'Floor, which raise or differ on NaN, the
+   --  infinities and -0.0.  A zero result keeps the sign of X (Ceil (-0.5) is
+   --  -0.0); NaN and the infinities come back unchanged (Sqrt: NaN for X < 0).
+   --  Min/Max: NaN if either is NaN, Min (-0.0, 0.0) = -0.0 and
+   --  Max (-0.0, 0.0) = 0.0 in either order.  Copysign: a NaN Y counts as
+   --  positive.
+   function Min_F64 (A, B : F64) return F64;
+   function Max_F64 (A, B : F64) return F64;
+   function Copysign_F64 (X, Y : F64) return F64;
+   function Trunc_F64 (X : F64) return F64;
+   function Floor_F64 (X : F64) return F64;
+   function Ceil_F64 (X : F64) return F64;
+   function Round_Even_F64 (X : F64) return F64;
+   function Sqrt_F64 (X : F64) return F64;
 
    function F64_To_I32 (X : F64) return Integer_32;
    function F64_To_I64 (X : F64) return Integer_64;
@@ -109,6 +122,9 @@ package Rcs_Num with SPARK_Mode, Pure is
 
    --  The tick at which cycle Cycle of a CPU whose heartbeat is Ticks base ticks is released.
    function Tick (Cycle, Ticks : Unsigned_64) return Unsigned_64 is ((Cycle - 1) * Ticks + 1);
+   --  `cycle` in a design: the number of the controller's step, from 1, when
+   --  it steps every Divider-th cycle of its CPU (cycles 1, 1 + Divider, ...).
+   function Step_Number (Cycle, Divider : Unsigned_64) return Integer_64;
    --  Cycles elapsed times the period, wrapping like an i64 duration.
    function Cycles_Ns (Now, Since : Unsigned_64; Period_Ns : Integer_64) return Integer_64;
 
