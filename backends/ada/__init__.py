@@ -21,7 +21,7 @@ import sys
 
 from rcsc.semantics import model as m
 from rcsc.backends.ada.naming import AdaNames
-from rcsc.backends.c import RUNTIME_FILES as C_RUNTIME_FILES, CBackend
+from rcsc.backends.c import LAUNCHER_FILES, RUNTIME_FILES as C_RUNTIME_FILES, CBackend
 from rcsc.backends.c.tables import main_tables
 from rcsc.outputs.backend import (
     BuildOptions, CtrlInfo, OutFile, RuleStep, StateTest, Target, base_cpu, built_controllers, cpu_ticks, expr_key,
@@ -36,6 +36,7 @@ SUFFIX = {"i32": "I32", "i64": "I64", "u32": "U32", "duration": "I64", "f64": "F
 ARITH = {"+": "Add", "-": "Sub", "*": "Mul", "/": "Div", "%": "Rem"}
 COMPARE = {"==": "=", "!=": "/=", "<": "<", "<=": "<=", ">": ">", ">=": ">="}
 PROJECT = "rcs_build.gpr"
+LAUNCH_PROJECT = "rcs_launch.gpr"  # several CPUs only: the launcher
 BUF = "rcs_ada_buf"  # the buffers, one C object (the runtime's namespace: rcs_)
 
 
@@ -69,7 +70,8 @@ class AdaBackend(Target):
     summary = "Ada 2012 controllers for GNAT (SPARK mode) and a Main Program on the C runtime"
     package = "rcsc.backends.ada"
     comment = staticmethod(ada_comment)
-    entry_files = (PROJECT,)
+    entry_files = (PROJECT, LAUNCH_PROJECT)
+    multi_cpu = True
     multi_rate = True
 
     def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
@@ -113,25 +115,43 @@ class AdaBackend(Target):
             files.append(OutFile(n.file(cx["pkg"], ".ads"), self.render("ctrl.ads.j2", **ctx, **cx)))
             files.append(OutFile(n.file(cx["pkg"], ".adb"), self.render("ctrl.adb.j2", **ctx, **cx)))
         mains = []
-        for cpu in d.cpus.values():
+        multi = len(d.cpus) > 1
+        for k, cpu in enumerate(d.cpus.values()):
+            # Every CPU's tables are linked into every CPU's program (gprbuild links
+            # the project's C objects into each main): one run function per CPU,
+            # and the buffers defined once (each process has its own).
             tables = main_tables(c, cpu, schedule_of(d, cpu, self.options), ctrls, buf=BUF)
             unit = n.main_unit(cpu.name)
-            files.append(OutFile(n.file(unit, ".adb"), self.render("main.adb.j2", **ctx, unit=unit, cpu=ada_comment(cpu.name), ctrl_pkgs=units)))
+            run = f"rcs_ada_run_{k}" if multi else "rcs_ada_run"
+            files.append(OutFile(n.file(unit, ".adb"), self.render("main.adb.j2", **ctx, unit=unit, cpu=ada_comment(cpu.name), ctrl_pkgs=units, run=run)))
             steps = [{"step": t["step"], "symbol": f"rcs_ada_step_{i}"} for i, t in enumerate(tables["ctrl_tables"])]
-            files.append(OutFile("rcs_tables.c", self.render("tables.c.j2", **common, **tables, cpu_string=_c_string(cpu.name), buf=BUF, steps=steps,
-                                                             deploy=self.options.exclude_simulators)))
+            files.append(OutFile(f"rcs_tables_{k}.c" if multi else "rcs_tables.c",
+                                 self.render("tables.c.j2", **common, **tables, cpu_string=_c_string(cpu.name), buf=BUF, steps=steps, run=run,
+                                             defines_buf=k == 0, deploy=self.options.exclude_simulators)))
             mains.append({"file": n.file(unit, ".adb"), "binary": c.n.binary(cpu.name)})
+        launcher = None
+        if multi:
+            # The C target's launcher, built by a C-only project of its own.
+            files += [OutFile(name, c.runtime_file(name)) for name in LAUNCHER_FILES]
+            files.append(OutFile(f"run_{c.n.p}.c", c.render("run.c.j2", **common, cpus=", ".join(_c_string(x) for x in d.cpus),
+                                                            bins=", ".join(_c_string(c.n.binary(x)) for x in d.cpus))))
+            launcher = {"name": f"run_{c.n.p}", "main": f"run_{c.n.p}.c", "sources": [f"run_{c.n.p}.c", *[x for x in LAUNCHER_FILES if x.endswith(".c")]]}
+            files.append(OutFile(LAUNCH_PROJECT, self.render("launch.gpr.j2", launcher=launcher)))
         if self.options.exclude_simulators:
             files.append(OutFile(f"{c.n.p}_io.h", c.render("io.h.j2", **common)))
             files.append(OutFile(f"{c.n.p}_io.c", c.render("io_stub.c.j2", **common), user=True))
-        files.append(OutFile(PROJECT, self.render("project.gpr.j2", mains=mains)))
+        files.append(OutFile(PROJECT, self.render("project.gpr.j2", mains=mains, launcher=launcher)))
         return files
 
     def build_commands(self, folder: str) -> list[tuple[list[str], dict[str, str] | None]]:
-        return [(["gprbuild", "-q", "-P", PROJECT], None)]
+        cmds: list[tuple[list[str], dict[str, str] | None]] = [(["gprbuild", "-q", "-P", PROJECT], None)]
+        if len(self.design.cpus) > 1:
+            cmds.append((["gprbuild", "-q", "-P", LAUNCH_PROJECT], None))
+        return cmds
 
     def program(self, folder: str) -> str:
-        return os.path.join(folder, self.c.n.binary(next(iter(self.design.cpus))))
+        d, n = self.design, self.c.n
+        return os.path.join(folder, f"run_{n.p}" if len(d.cpus) > 1 else n.binary(next(iter(d.cpus))))
 
     def context(self) -> dict:
         n = self.n

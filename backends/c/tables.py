@@ -144,7 +144,7 @@ def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: li
     gm_stamps = [f"offsetof({tg.n.fixed('buffers')}, gm_stamp.{tg.ident(n)})," for n in d.gm] if keeps_gm_stamps(d) else []
     out = {
         "events_hash": c_string(interface_hash(d, ctrls)),
-        "multi": multi_tables(tg, cpu, ctrls) if len(d.cpus) > 1 else None,
+        "multi": multi_tables(tg, cpu, ctrls, buf) if len(d.cpus) > 1 else None,
         "gm_stamps": gm_stamps,
         "period": tg.period_macro(cpu.name),
         "types": types,
@@ -171,7 +171,7 @@ def main_tables(tg: CTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls: li
     return out
 
 
-def multi_tables(tg: CTarget, cpu: m.Cpu, ctrls: list[m.Controller]) -> dict:
+def multi_tables(tg: CTarget, cpu: m.Cpu, ctrls: list[m.Controller], buf: str = "buf") -> dict:
     """What one CPU of a multi-CPU design knows of the others: names, heartbeats
     in base ticks, the buffers that cross (writer, readers, where they are in
     the buffers struct and where their stamp is), and what its trace shows."""
@@ -189,7 +189,7 @@ def multi_tables(tg: CTarget, cpu: m.Cpu, ctrls: list[m.Controller]) -> dict:
         else:
             member = n.buffer_member(x.name, "status")
             stamp = f"offsetof({buffers}, {member}.head.stamp)"
-        rows.append(f"{{{names.index(x.writer_cpu)}u, UINT64_C({hex(readers)}), offsetof({buffers}, {member}), sizeof buf.{member}, {stamp}}}, /* {x.kind} {tg.comment(x.name)} */")
+        rows.append(f"{{{names.index(x.writer_cpu)}u, UINT64_C({hex(readers)}), offsetof({buffers}, {member}), sizeof {buf}.{member}, {stamp}}}, /* {x.kind} {tg.comment(x.name)} */")
     gm_names = list(d.gm)
     wire = wire_tables(tg) if tg.options.transport == "dds" else None
     return {
