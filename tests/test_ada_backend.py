@@ -106,13 +106,18 @@ def test_controller_packages_are_spark_and_freestanding(tmp_path: Path) -> None:
         assert not re.search(r"\b(new|raise|access|Unchecked_Deallocation|Text_IO)\b", code, re.I), p.name
 
 
-def test_a_multi_cpu_design_is_refused(tmp_path: Path, capsys) -> None:
+def test_a_multi_cpu_design_builds_but_not_over_dds(tmp_path: Path, capsys) -> None:
+    """Several CPUs build (tests/test_multicpu_targets.py runs them); the DDS transport is the C target's only."""
     from rcsc import cli
 
-    rc = cli.main(["build", str(ROOT / "examples/machine_tool/machine_tool.rcs"), "--target", "ada", "-o", str(tmp_path / "out")])
+    design = str(ROOT / "examples/machine_tool/machine_tool.rcs")
+    assert cli.main(["build", design, "--target", "ada", "-o", str(tmp_path / "shm")]) == 0
+    assert (tmp_path / "shm" / "rcs_launch.gpr").exists() and (tmp_path / "shm" / "run_machine_tool.c").exists()
+    capsys.readouterr()
+    rc = cli.main(["build", design, "--target", "ada", "--transport", "dds", "-o", str(tmp_path / "dds")])
     assert rc != 0
-    assert "error[E0800]: the ada target builds single-CPU designs" in capsys.readouterr().err
-    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+    assert "error[E0820]: the ada target cannot exchange buffers over `dds`; it has shm" in capsys.readouterr().err
+    assert not (tmp_path / "dds").exists() or not any((tmp_path / "dds").iterdir())
 
 
 def test_ada_literals_carry_their_type_and_keep_every_double() -> None:

@@ -49,8 +49,8 @@ CONFIG = "rcsc.toml"
 # Codes that no stage emits yet, so no case can expect them.  The coverage
 # test fails when a code here gets a case (remove it from this list then).
 PENDING: dict[str, str] = {
-    # Both built-in targets have the DDS transport; tests/test_dds.py checks
-    # the refusal with a target made for the test.
+    # A case cannot give `--transport`: tests/test_dds.py checks the refusal
+    # with a target made for the test, tests/test_ada_backend.py with Ada.
     "E0820": "a target without the DDS transport given --transport dds",
     # `rcsc console` findings concern a running Main Program, not a design:
     # tests/test_console.py drives each against running C and Rust programs.

@@ -3,7 +3,9 @@
 `rcsc build` of a design with several CPUs gives one program per CPU and a
 launcher (`run_<design>`) that starts them all with one run id; they
 exchange the buffers that cross between CPUs through POSIX shared memory.
-Checked here, for C (gcc -O2 and clang under ASan/UBSan) and Rust (release):
+Checked here, for C (gcc -O2 and clang under ASan/UBSan), Rust (release) and
+Ada (GNAT -O2, run-time checks on; its programs use the C runtime's exchange
+and the C launcher):
 
 - with `--lockstep` (each CPU waits for the samples it reads) the launcher's
   merged trace equals `rcsc sim`'s byte for byte, on every multi-CPU design
@@ -180,6 +182,51 @@ def test_rust_lockstep_trace_equals_simulator(rust_builds, case, tmp_path):
     want = sim_trace(design, scn, tmp_path)
     got = trace.read_bytes()
     assert got == want, first_difference(got, want)
+
+
+@pytest.fixture(scope="module")
+def ada_builds(tmp_path_factory):
+    """design -> the folder with the Ada CPUs' programs (GNAT -O2, checks on) and the C launcher."""
+    base = tmp_path_factory.mktemp("mc_ada")
+    cache: dict[Path, Path] = {}
+
+    def get(design: Path) -> Path:
+        if design not in cache:
+            src = base / design.stem
+            generate(design, "ada", src)
+            for project in ("rcs_build.gpr", "rcs_launch.gpr"):
+                r = subprocess.run(["gprbuild", "-q", "-P", project, "-XRCS_OPT=-O2"], cwd=src, capture_output=True, text=True)
+                assert r.returncode == 0, (r.stdout + r.stderr)[-4000:]
+                assert "warning" not in r.stdout + r.stderr, r.stdout + r.stderr
+            cache[design] = src
+        return cache[design]
+
+    return get
+
+
+@pytest.mark.parametrize("case", CASES, ids=lambda c: f"{c[0].stem}/{c[1].stem}")
+def test_ada_lockstep_trace_equals_simulator(ada_builds, case, tmp_path):
+    design, scn = case
+    folder = ada_builds(design)
+    name = next(p.name for p in folder.glob("run_*") if "." not in p.name)[4:]
+    trace = tmp_path / "ada.jsonl"
+    r = launch(folder, name, "--lockstep", "--no-timing", "--scenario", str(event_file(design, scn)), "--trace", str(trace))
+    assert r.returncode == 0, r.stderr
+    want = sim_trace(design, scn, tmp_path)
+    got = trace.read_bytes()
+    assert got == want, first_difference(got, want)
+    assert len(cpu_pids(r.stderr)) == len(set(re.findall(rb'"cpu":"(\w+)"', want)))
+
+
+def test_ada_build_has_a_program_per_cpu_and_the_c_launcher(ada_builds):
+    folder = ada_builds(RELAY)
+    names = {p.name for p in folder.iterdir()}
+    assert {"relay_0_main_0_slow.adb", "relay_0_main_0_fast.adb", "rcs_tables_0.c", "rcs_tables_1.c", "run_relay.c", "rcs_launch.gpr",
+            "relay_slow", "relay_fast", "run_relay"} <= names
+    # Each CPU's tables step only its own schedule; the buffers are defined once.
+    assert re.search(r"static const size_t ctrls_here\[\] = \{ 1u, 3u \};", (folder / "rcs_tables_1.c").read_text())
+    assert sum("relay_buffers rcs_ada_buf;" in (folder / f"rcs_tables_{k}.c").read_text() for k in (0, 1)) == 2
+    assert sum(re.search(r"^relay_buffers rcs_ada_buf;", (folder / f"rcs_tables_{k}.c").read_text(), re.M) is not None for k in (0, 1)) == 1
 
 
 def test_rust_crashed_cpu_stops_the_others(rust_builds):
