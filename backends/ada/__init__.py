@@ -3,7 +3,7 @@
 `AdaBackend.files()` lays the design out as GNAT library units: a types
 package (the buffers, laid out as the C runtime reads them), the pure
 functions, the extern functions (a user body), one package per controller,
-and the Main Program per CPU.  The Main Program is an Ada procedure that
+and the Main Program per CPU (several CPUs: the C launcher too).  The Main Program is an Ada procedure that
 hands the design's tables to the C target's design-independent runtime
 (rcs_runtime.c: options, heartbeat, event reader, trace, timing table,
 console) through `pragma Import`, so the three targets read one event-file
@@ -67,7 +67,7 @@ def design_names(d: m.Design) -> list[str]:
 @register
 class AdaBackend(Target):
     name = "ada"
-    summary = "Ada 2012 controllers for GNAT (SPARK mode) and a Main Program on the C runtime"
+    summary = "Ada 2012 controllers for GNAT (SPARK mode) and a Main Program per CPU on the C runtime"
     package = "rcsc.backends.ada"
     comment = staticmethod(ada_comment)
     entry_files = (PROJECT, LAUNCH_PROJECT)
