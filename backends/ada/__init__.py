@@ -3,10 +3,10 @@
 `AdaBackend.files()` lays the design out as GNAT library units: a types
 package (the buffers, laid out as the C runtime reads them), the pure
 functions, the extern functions (a user body), one package per controller,
-and the Main Program per CPU (several CPUs: the C launcher too).  The Main Program is an Ada procedure that
-hands the design's tables to the C target's design-independent runtime
-(rcs_runtime.c: options, heartbeat, event reader, trace, timing table,
-console) through `pragma Import`, so the three targets read one event-file
+and the Main Program per CPU (several CPUs: and the C target's launcher).
+The Main Program is an Ada procedure that hands the design's tables to
+the C target's design-independent runtime (rcs_runtime.c: options,
+heartbeat, event reader, trace, timing table, console) through `pragma Import`, so the three targets read one event-file
 format with one reader and print floats in the trace with one formatter.
 The tables themselves, and the C declaration of the buffers they point
 into, are rendered by the C target (`rcsc.backends.c`).  See docs/backends.md.
