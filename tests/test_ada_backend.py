@@ -203,3 +203,27 @@ def test_math_builtins_use_the_bit_pattern_algorithms_not_ada_numerics(tmp_path:
     assert "Ada.Numerics" not in runtime and "'Floor" not in runtime and "'Copy_Sign" not in runtime
     code = "".join(p.read_text(encoding="ascii") for p in tmp_path.glob("mathfn_0_ctrl_0_*.adb"))
     assert "Rcs_Num.Round_Even_F64 (" in code and "Rcs_Num.Step_Number (Cycle, 3)" in code
+
+
+def test_a_plan_less_simulator_whose_pre_ends_in_a_comment_builds(tmp_path: Path) -> None:
+    """A step always reads `Cycle` (the entry cycle of a new command, the status
+    stamp): a plan-less simulator whose `pre` ends with a self-assignment (an
+    Ada comment line) once got `pragma Unreferenced (Cycle)`, which GNAT
+    rejects under -gnatwe (found by the differential tester, seed 7005)."""
+    from c_build import gprbuild
+
+    design = tmp_path / "d.rcs"
+    design.write_text(
+        "design d\n\n"
+        "simulator SIM level 0 budget 100 us {\n"
+        "    status x: f64 = 0.0\n"
+        "    pre { x = x; }\n"
+        "}\n\n"
+        "cpu main {\n    heartbeat 10 ms\n    schedule SIM\n}\n",
+        encoding="utf-8",
+    )
+    out = tmp_path / "ada"
+    generate(design, "ada", out)
+    step = (out / "d_0_ctrl_0_sim.adb").read_text(encoding="utf-8")
+    assert "pragma Unreferenced (Cycle)" not in step and "Cycle" in step
+    gprbuild(out, "-O0", tmp_path / "prog")
