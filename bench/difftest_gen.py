@@ -713,6 +713,27 @@ def generate(seed: int, hostile: bool = False, max_attempts: int = 50) -> Case:
     raise RuntimeError(f"seed {seed}: no valid design in {max_attempts} draws")
 
 
+_SOLVER_CACHE: list[str] = []
+
+
+def solver_cache() -> str:
+    """The run's one folder of solver results (`rcsc.checks.cache`), made on first use.
+
+    The generator's check of a design, the runner's check and every
+    `rcsc build` of it ask the solver the same questions; their entries are
+    keyed by the plans' content, so the later checks read the first one's
+    answers (RCSC_NO_CACHE=1 still turns this off)."""
+    if not _SOLVER_CACHE:
+        import atexit
+        import shutil
+        import tempfile
+
+        folder = tempfile.mkdtemp(prefix="difftest-cache-")
+        atexit.register(shutil.rmtree, folder, True)
+        _SOLVER_CACHE.append(folder)
+    return _SOLVER_CACHE[0]
+
+
 def check_case(case: Case) -> tuple[list[str], set[int]]:
     """The errors of `rcsc check` on the design and of loading its scenario
     (none: clean), and the lines of the rules that can never fire (E0506)."""
@@ -727,7 +748,7 @@ def check_case(case: Case) -> tuple[list[str], set[int]]:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / f"{case.name}.rcs"
         path.write_text(case.design, encoding="utf-8")
-        result = check_path(str(path))
+        result = check_path(str(path), cache_dir=solver_cache())
         errors = [f"{d.code}: {d.message}" for d in result.diags.errors]
         dead = {d.span.line for d in result.diags.errors if d.code in ("E0506", "E0513") and d.span is not None}
         if errors or result.model is None:

@@ -26,7 +26,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from difftest_gen import Case
+from difftest_gen import Case, solver_cache
 
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wshadow", "-Werror", "-ffp-contract=off"]
 C_CONFIGS = {
@@ -95,7 +95,12 @@ def prepare(case: Case, base: Path) -> Prepared:
     scn = folder / f"{case.name}.scn"
     scn.write_text(case.scenario, encoding="utf-8")
     p = Prepared(case, folder, design, scn)
-    result = check_path(str(design))
+    # The builds below (`rcsc build`, which checks first) read the solver
+    # results of the design's `.rcsc-cache/`: it is the run's shared folder.
+    link = folder / ".rcsc-cache"
+    if not link.exists():
+        link.symlink_to(solver_cache(), target_is_directory=True)
+    result = check_path(str(design), cache_dir=str(link))
     if not result.ok or result.model is None:
         p.findings.append(Finding(case.seed, "invalid", "rcsc", "\n".join(d.message for d in result.diags.errors)))
         return p

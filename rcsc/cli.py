@@ -122,10 +122,12 @@ def _load_driver() -> ModuleType:
     return driver
 
 
-def _check(path: str, as_module: bool = False, cache: bool = False, replay: bool = False):
+def _check(path: str, as_module: bool = False, cache: bool = True, replay: bool = False):
     """Run the front end on `path`; an unreadable root file is a usage error (exit 2).
 
-    With `cache`, the guard and value analyses use the design's `.rcsc-cache/` folder;
+    With `cache`, the guard and value analyses use the design's `.rcsc-cache/` folder
+    (every command that checks a design does, so `rcsc build` after `rcsc check`
+    asks the solver nothing new; RCSC_NO_CACHE=1 turns it off for all of them);
     with `replay` too, a design whose files are all unchanged since a check
     stored there answers with that check's findings (`rcsc.checks.replay`:
     findings only, no model, so only for `rcsc check`).

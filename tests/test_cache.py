@@ -86,6 +86,26 @@ def test_the_cache_is_really_read(tmp_path: Path, capsys) -> None:
     assert "W0515" not in _check(design, capsys)
 
 
+def test_build_reads_the_cache_of_check(tmp_path: Path, capsys, monkeypatch) -> None:
+    """`rcsc build` checks first, with the same cache as `rcsc check`: with an
+    entry rewritten to hold no findings, a build that denies warnings goes
+    through (it believed the cache), and with RCSC_NO_CACHE=1 it is refused
+    (the solver finds the warning again)."""
+    design = tmp_path / "d.rcs"
+    shutil.copy(CASES / "W0515_order_dependent.rcs", design)
+    assert "W0515" in _check(design, capsys)
+    for path in _entries(tmp_path / cache.FOLDER):
+        doc = json.loads(path.read_text())
+        doc["payload"] = "[]"
+        doc["checksum"] = __import__("hashlib").sha256(b"[]").hexdigest()
+        path.write_text(json.dumps(doc))
+    build = ["build", str(design), "--target", "c", "--deny-warnings", "-o", str(tmp_path / "out")]
+    assert main(build) == 0, capsys.readouterr().err
+    monkeypatch.setenv("RCSC_NO_CACHE", "1")
+    assert main(build[:-1] + [str(tmp_path / "out2")]) == 1
+    assert "W0515" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     "damage",
     [

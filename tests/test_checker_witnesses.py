@@ -114,3 +114,31 @@ def test_record_field_range_witnesses() -> None:
     assert found[27]["witness"]["cmd.x"] not in range(0, 11) and found[27]["range"] == [0, 10]
     assert found[28]["witness"] == {}  # the constant 4000.0: no input needed
     assert not 0.0 <= found[29]["witness"]["cmd.r"] * 2.0 <= 3000.0
+
+
+def test_division_by_a_variable_is_decided(tmp_path) -> None:
+    """A sum of remainders by an i64 variable (from a random design, seed 3001
+    of the differential tester): the solver once ran out of its budget on it
+    (W0518, "canceled") when `/` and `%` went through bit-vectors; it now
+    decides it, and the witness divides by zero."""
+    src = tmp_path / "rem.rcs"
+    src.write_text(
+        "design d\n\n"
+        "gm n: i64 = 0 from env\n"
+        "gm total: i64 = 0 to env\n\n"
+        "controller TOP level 1 budget 1 ms {\n"
+        "    reads n\n"
+        "    writes total\n"
+        "    verb RUN\n"
+        "    plan RUN {\n"
+        "        R1: true | new -> done | total = (((100_000 % n) + 3037000500) % n) + 65537;\n"
+        "    }\n"
+        "}\n\n"
+        "cpu main {\n    heartbeat 10 ms\n    schedule TOP\n}\n",
+        encoding="utf-8",
+    )
+    result = check_path(str(src))
+    codes = [d.code for d in result.diags]
+    assert "W0518" not in codes, [d.message for d in result.diags]
+    found = [d for d in result.diags if d.code == "W0525"]
+    assert found and all(d.data["witness"]["n"] == 0 for d in found)

@@ -27,6 +27,13 @@ from difftest_run import run_batch  # noqa: E402
 GEN_SEEDS = range(0, 30)
 
 
+@pytest.fixture(autouse=True)
+def _solver_cache_on(monkeypatch):
+    """The tester shares one solver cache between the checks of a design (its
+    generation, its run, its builds), as `bench/difftest.py` runs it."""
+    monkeypatch.delenv("RCSC_NO_CACHE", raising=False)
+
+
 @functools.cache
 def case_of(seed: int, hostile: bool = False):
     return generate(seed, hostile=hostile)

@@ -145,3 +145,40 @@ def test_abs_of_a_duration_is_a_duration(tmp_path: Path) -> None:
     sim.run_cycle()
     assert sim.statuses["C"].fields["a"] == 3_000_000
     assert type(sim.statuses["C"].fields["a"]) is int
+
+
+def _solver_value(t, a: int, b: int, op: str, constant_divisor: bool) -> int:
+    """What the guard and value analyses' encoding (`rcsc.checks.smt.int_divide`) says `a op b` is."""
+    import z3
+
+    from rcsc.checks.smt import int_divide
+
+    x = z3.Int("a")
+    y = z3.IntVal(b) if constant_divisor else z3.Int("b")
+    s = z3.Solver()
+    s.add(x == a)
+    if not constant_divisor:
+        s.add(y == b)
+    r = z3.Int("r")
+    s.add(r == int_divide(x, y, op, t))
+    assert s.check() == z3.sat
+    return s.model()[r].as_long()
+
+
+_EDGES = {
+    I32: [I32_MIN, I32_MIN + 1, -7, -2, -1, 0, 1, 2, 7, I32_MAX - 1, I32_MAX],
+    I64: [-(2**63), -(2**63) + 1, -100_000, -3, -1, 0, 1, 3, 3037000500, 2**63 - 1],
+    U32: [0, 1, 2, 7, 2**31, 2**32 - 2, 2**32 - 1],
+}
+
+
+@pytest.mark.parametrize("t", [I32, I64, U32], ids=lambda t: t.name)
+def test_the_solver_divides_as_the_numeric_rules(t) -> None:
+    """The solver's encoding of `/` and `%` (by a constant and by a variable)
+    agrees with rcsc.semantics.numeric on every pair of edge values: the
+    analyses must prove facts about the program that runs."""
+    for a in _EDGES[t]:
+        for b in _EDGES[t]:
+            for constant in (True, False):
+                assert _solver_value(t, a, b, "/", constant) == numeric.int_div(a, b, t), (a, b, constant)
+                assert _solver_value(t, a, b, "%", constant) == numeric.int_rem(a, b, t), (a, b, constant)

@@ -204,6 +204,33 @@ def _from_bv(x, t: IntType):
     return z3.BV2Int(x, is_signed=t.signed)
 
 
+def int_divide(a, b, op: str, it: IntType):
+    """`a / b` or `a % b` on integer type `it`, as rcsc defines them
+    (`rcsc.semantics.numeric.int_div`/`int_rem`): truncation toward zero,
+    0 for a zero divisor, MIN / -1 wraps to MIN and MIN % -1 is 0."""
+    kb = _int_numeral(b)
+    if kb is not None:
+        if kb == 0:
+            return z3.IntVal(0)
+        # truncating division by a constant (z3's div is Euclidean)
+        q = z3.If(a >= 0, a / abs(kb), -((-a) / abs(kb)))
+        q = q if kb > 0 else -q
+        if op == "/":
+            return wrap_once(q, it)  # MIN / -1 wraps to MIN
+        return a - q * kb
+    # Truncating division by a variable, in integer arithmetic: z3's `div`
+    # is Euclidean, so the quotient is taken of the magnitudes and given the
+    # sign.  (The same question through bit-vectors, Int2BV/BV2Int, took the
+    # solver about 100 times longer or ran out of its budget: it mixes two
+    # theories.)
+    if it.signed:
+        q = z3.If(a >= 0, z3.If(b > 0, a / b, -(a / -b)), z3.If(b > 0, -(-a / b), -a / -b))
+    else:
+        q = a / b  # both operands are in 0..max
+    r = wrap_once(q, it) if op == "/" else a - b * q
+    return _ite(b == 0, z3.IntVal(0), r)
+
+
 I64_T = I64  # durations are i64 nanoseconds
 
 
@@ -598,20 +625,7 @@ class Encoder:
                     return wrap(a * b, it)
                 return _from_bv(_bv(a, it) * _bv(b, it), it)
             if op in ("/", "%"):
-                if kb is not None:
-                    if kb == 0:
-                        return z3.IntVal(0)
-                    # truncating division by a constant (z3's div is Euclidean)
-                    q = z3.If(a >= 0, a / abs(kb), -((-a) / abs(kb)))
-                    q = q if kb > 0 else -q
-                    if op == "/":
-                        return wrap_once(q, it)  # MIN / -1 wraps to MIN
-                    return a - q * kb
-                if it.signed:
-                    r = _from_bv(_bv(a, it) / _bv(b, it) if op == "/" else z3.SRem(_bv(a, it), _bv(b, it)), it)
-                else:
-                    r = _from_bv(z3.UDiv(_bv(a, it), _bv(b, it)) if op == "/" else z3.URem(_bv(a, it), _bv(b, it)), it)
-                return _ite(b == 0, z3.IntVal(0), r)
+                return int_divide(a, b, op, it)
         raise Unsupported(f"{op} on {t}")
 
     def e_Call(self, e: m.Call, args):
