@@ -227,3 +227,37 @@ def test_a_plan_less_simulator_whose_pre_ends_in_a_comment_builds(tmp_path: Path
     step = (out / "d_0_ctrl_0_sim.adb").read_text(encoding="utf-8")
     assert "pragma Unreferenced (Cycle)" not in step and "Cycle" in step
     gprbuild(out, "-O0", tmp_path / "prog")
+
+
+def test_a_float_division_by_a_folded_zero_builds_and_agrees(ada_builds: Builds, tmp_path: Path) -> None:
+    """`y / (if K > K then y else 0.0)` folds to a division by the constant
+    0.0: IEEE gives an infinity (or NaN for 0.0 / 0.0), as in the simulator,
+    but GNAT warned of the static zero divisor and -gnatwe refused the build
+    (found by the differential tester, seed 3026)."""
+    design = tmp_path / "fdiv.rcs"
+    design.write_text(
+        "design fdiv\n\n"
+        "const K: i32 = 3\n"
+        "gm y: f64 = 0.0 from env\n"
+        "gm x: f64 = 1.0 to env\n\n"
+        "controller TOP level 1 budget 100 us {\n"
+        "    reads y\n"
+        "    writes x\n"
+        "    verb GO\n"
+        "    plan GO {\n"
+        "        R1: true | new -> done | x = y / (if (K > K) then y else 0.0);\n"
+        "    }\n"
+        "}\n\n"
+        "cpu main {\n    heartbeat 10 ms\n    schedule TOP\n}\n",
+        encoding="utf-8",
+    )
+    scn = tmp_path / "fdiv.scn"
+    scn.write_text('scenario "fdiv"\ncycles 6\n\nat 1: y = 1.5\nat 1: TOP.GO()\nat 3: y = -0.0\nat 3: TOP.GO()\n', encoding="utf-8")
+    expected = reference_trace(design, scn)
+    assert b"inf" in expected.lower() or b"Infinity" in expected
+    for opt in ADA_OPTS:
+        exe = ada_builds.ada_binary(design, opt)
+        trace = tmp_path / f"trace{opt}.jsonl"
+        proc = run_main(exe, design, scn, trace)
+        assert proc.returncode == 0 and proc.stderr == "", proc.stderr[-3000:]
+        assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())

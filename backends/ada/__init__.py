@@ -372,6 +372,11 @@ class AdaBackend(Target):
             return f"({a} {COMPARE[e.op]} {b})"
         if e.type.name in ("i32", "i64", "u32", "duration"):
             return f"Rcs_Num.{ARITH[e.op]}_{SUFFIX[e.type.name]} ({_strip(a)}, {_strip(b)})"
+        if e.op == "/" and isinstance(e.right, m.Const) and e.right.value == 0.0:
+            # IEEE division by zero is defined (an infinity or NaN), but GNAT
+            # warns of a static zero divisor ("float division by zero"), and
+            # -gnatwe makes that an error: the divisor goes through the identity.
+            b = self.same(e.right, b)
         return f"({a} {e.op} {b})"
 
     def ifexpr_expr(self, e: m.IfExpr) -> str:
