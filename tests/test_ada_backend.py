@@ -261,3 +261,36 @@ def test_a_float_division_by_a_folded_zero_builds_and_agrees(ada_builds: Builds,
         proc = run_main(exe, design, scn, trace)
         assert proc.returncode == 0 and proc.stderr == "", proc.stderr[-3000:]
         assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())
+
+
+def test_a_conversion_to_the_same_type_keeps_its_parentheses(ada_builds: Builds, tmp_path: Path) -> None:
+    """`-f64(-(-y))` and `w - f64(-y)`: a conversion to the operand's own
+    type is the operand, but it stands where the call stood and keeps its
+    parentheses; without them the Ada was `(--Rcs_Num.Same_F64 (...))`, a
+    comment, and GNAT refused the build (differential tester, seed 3045)."""
+    design = tmp_path / "conv.rcs"
+    design.write_text(
+        "design conv\n\n"
+        "gm y: f64 = 0.0 from env\n"
+        "gm x: f64 = 1.0 to env\n"
+        "gm z: f64 = 1.0 to env\n\n"
+        "controller TOP level 1 budget 100 us {\n"
+        "    reads y\n"
+        "    writes x, z\n"
+        "    verb GO\n"
+        "    plan GO {\n"
+        "        R1: true | new -> done | x = ceil(-f64((-(-y)))), z = x - f64(-y);\n"
+        "    }\n"
+        "}\n\n"
+        "cpu main {\n    heartbeat 10 ms\n    schedule TOP\n}\n",
+        encoding="utf-8",
+    )
+    scn = tmp_path / "conv.scn"
+    scn.write_text('scenario "conv"\ncycles 4\n\nat 1: y = 2.5\nat 1: TOP.GO()\n', encoding="utf-8")
+    expected = reference_trace(design, scn)
+    for opt in ADA_OPTS:
+        exe = ada_builds.ada_binary(design, opt)
+        trace = tmp_path / f"trace{opt}.jsonl"
+        proc = run_main(exe, design, scn, trace)
+        assert proc.returncode == 0 and proc.stderr == "", proc.stderr[-3000:]
+        assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())

@@ -383,7 +383,8 @@ class AdaBackend(Target):
         return f"(if {_strip(self.expr(e.cond))} then {_strip(self.expr(e.then))} else {_strip(self.expr(e.else_))})"
 
     def call_expr(self, e: m.Call) -> str:
-        args = [_strip(self.expr(a)) for a in e.args]
+        raw = [self.expr(a) for a in e.args]
+        args = [_strip(a) for a in raw]
         if e.kind in ("fn", "extern"):
             name = self.cse.get(expr_key(e))
             return name if name is not None else self.n.function(e.func) + (f" ({', '.join(args)})" if args else "")
@@ -395,7 +396,9 @@ class AdaBackend(Target):
         if e.kind == "convert":
             s, d = SUFFIX[e.args[0].type.name], SUFFIX[e.type.name]
             if s == d:
-                return args[0]
+                # The operand stands where the conversion stood: it keeps its
+                # parentheses (`-f64(-x)` would be `--x`, an Ada comment).
+                return raw[0]
             return f"Rcs_Num.To_F64 ({args[0]})" if d == "F64" else f"Rcs_Num.{s}_To_{d} ({args[0]})"
         if e.func == "seconds":
             return f"(Rcs_Num.To_F64 ({args[0]}) / F64'(1.0E+09))"
