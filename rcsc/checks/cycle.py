@@ -30,9 +30,10 @@ _PERIOD_NAME = re.compile(r"^(DT|TS|PERIOD|CYCLE|CYCLE_TIME|SAMPLE_TIME|TICK)$|_
 def check(design: Design, diags: Diagnostics) -> None:
     for c in design.controllers.values():
         cpu = design.cpus.get(c.cpu) if c.cpu else None
+        exprs = list(_controller_exprs(c))  # walked once for both questions
         if cpu is not None and cpu.heartbeat_ns > 0:
-            _period_constants(design, c, cpu, diags)
-        _extern_budgets(design, c, diags)
+            _period_constants(design, c, cpu, diags, exprs)
+        _extern_budgets(design, c, diags, exprs)
 
 
 def _exprs(c: m.Controller, stmts: list[m.Stmt]):
@@ -59,9 +60,9 @@ def _as_ns(const: m.ConstDef) -> float | None:
     return None
 
 
-def _period_constants(design: Design, c: m.Controller, cpu: m.Cpu, diags: Diagnostics) -> None:
+def _period_constants(design: Design, c: m.Controller, cpu: m.Cpu, diags: Diagnostics, exprs: list[m.Expr]) -> None:
     seen: set[str] = set()
-    for e in _controller_exprs(c):
+    for e in exprs:
         if not isinstance(e, m.Const) or e.name is None or e.name in seen or not _PERIOD_NAME.search(e.name):
             continue
         const = design.consts.get(e.name)
@@ -78,11 +79,11 @@ def _period_constants(design: Design, c: m.Controller, cpu: m.Cpu, diags: Diagno
         diag.with_help(f"make `{e.name}` equal to the heartbeat ({fmt_ns(cpu.heartbeat_ns)}), or change the heartbeat")
 
 
-def _extern_budgets(design: Design, c: m.Controller, diags: Diagnostics) -> None:
+def _extern_budgets(design: Design, c: m.Controller, diags: Diagnostics, exprs: list[m.Expr]) -> None:
     def calls(exprs):
         return [e for e in exprs if isinstance(e, m.Call) and e.kind == "extern" and e.func in design.functions]
 
-    for call in calls(_controller_exprs(c)):
+    for call in calls(exprs):
         fn = design.functions[call.func]
         if fn.budget_ns > c.budget_ns:
             diag = diags.add("E0611", call.span, f"`{call.func}` takes up to {fmt_ns(fn.budget_ns)}, more than the whole budget of `{c.name}` ({fmt_ns(c.budget_ns)})", "does not fit")

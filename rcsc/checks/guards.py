@@ -469,6 +469,7 @@ class _Analysis:
         for s in self.enc.side:
             self.solver.add(s)
         self.vectors: list[_Sat] = []
+        self.jobkeys: dict[int, tuple] = {}
         self.unsat: set[tuple] = set()  # the questions answered unsat (as sorted literals)
         # `done` and `error` as current states are E0510: never evaluated.
         self.states = [s for s in plan_states(plan) if s not in ("done", "error")]
@@ -480,6 +481,13 @@ class _Analysis:
             if r.otherwise and r.state.kind != "any":
                 key = r.state.name if r.state.kind == "named" else "new"
                 self.otherwise.setdefault(key or "", r)
+
+    def jobkey(self, r: m.Rule) -> tuple:
+        """`_skey(r.jobs)`, made once per rule (the pairs of step 4 compare each rule with every later one)."""
+        k = self.jobkeys.get(r.index)
+        if k is None:
+            k = self.jobkeys[r.index] = _skey(r.jobs)
+        return k
 
     def sources(self, r: m.Rule) -> list[str]:
         return [s for s in rule_sources(r, self.states) if s in self.rules_in]
@@ -758,7 +766,7 @@ class _Analysis:
                         continue
                     for rj in rules[a + 1:]:
                         pair = (ri.index, rj.index)
-                        if pair in reported or _outcome(ri, s) == _outcome(rj, s):
+                        if pair in reported or (_target(ri, s) == _target(rj, s) and self.jobkey(ri) == self.jobkey(rj)):
                             continue
                         if not self._live(rj, s, live):
                             continue
@@ -1197,7 +1205,6 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
         return
     if plan.verb not in c.verbs:
         return
-    lit_dead = literal_dead_rules(plan)
     period = c.period_ns or None
     canon = None
     pkey = None
@@ -1226,6 +1233,7 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
                 for f in findings:
                     _report(design, c, plan, f, diags)
                 return
+    lit_dead = literal_dead_rules(plan)
     try:
         an = _Analysis(design, c, plan, assigned, opts, st, nan)
         findings = an.run(lit_dead)

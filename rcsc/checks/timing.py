@@ -71,11 +71,16 @@ def check(design: Design, diags: Diagnostics) -> None:
             continue
         # Ages count base ticks (stamps are deadlines of any CPU), everything
         # else this controller's own steps (`in_state`, its timers).
-        with_age = _compared_with_age(c)
+        base = design.base_tick_ns or period
+        with_age = None  # made only for a duration that is not a whole number of both units
         for span, ns in _durations(c):
             unit, steps = period, "cycles" if c.divider == 1 else "steps"
+            if not ns % period and not ns % base:
+                continue  # a whole number of either unit: no finding
+            if with_age is None:
+                with_age = _compared_with_age(c)
             if (span.start, span.end) in with_age:
-                unit, steps = design.base_tick_ns or period, "base ticks"
+                unit, steps = base, "base ticks"
             if ns % unit:
                 cycles = -(-ns // unit)
                 diags.add("W0601", span, f"{fmt_ns(ns)} is not a whole number of {fmt_ns(unit)} {steps}", f"rounds up to {cycles} {steps}").with_help(

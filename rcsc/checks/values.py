@@ -273,13 +273,15 @@ class _Plan:
                 self._index_checks(r.guard, contexts, r)
             assigned: set[tuple[str, str]] = set()
             for job in r.jobs:
-                for e in m.stmt_exprs(job):
-                    if _reads(e) & assigned:
-                        continue
+                # The job's expressions that read nothing an earlier job of
+                # the rule assigned (`assigned` does not change below until
+                # the job is done, so this is asked once per expression).
+                exprs = [e for e in m.stmt_exprs(job) if not (assigned and _reads(e) & assigned)]
+                for e in exprs:
                     self._expr_checks(e, fired, r)
                     self._index_checks(e, fired, r)
                 if (isinstance(job, m.Assign) and job.target.index is not None and not isinstance(job.target.index, m.Const)
-                        and not (_reads(job.target.index) & assigned)):
+                        and not (assigned and _reads(job.target.index) & assigned)):
                     size = _array_size(self.design, self.c, job.target)
                     if size is not None:
                         self._index_check(job.target.index, size, job.target.index.span, [job.target.index], fired, r, True)
@@ -287,9 +289,8 @@ class _Plan:
                     self._command(job, fired, r, assigned)
                 elif isinstance(job, m.Assign):
                     self._assign(job, fired, r, assigned)
-                for e in m.stmt_exprs(job):
-                    if not _reads(e) & assigned:
-                        self._records(e, fired, r, assigned)
+                for e in exprs:
+                    self._records(e, fired, r, assigned)
                 assigned |= _assigned_names(job)
 
     # ---- questions ----
@@ -480,7 +481,7 @@ class _Plan:
         return var.range if var is not None else None
 
     def _slot(self, e: m.Expr, rng: m.Range | None, t: Type, what: str, contexts, r: m.Rule, assigned) -> None:
-        if rng is None or _reads(e) & assigned or (e.span.start, "range") in self.reported or self._history(e):
+        if rng is None or (assigned and _reads(e) & assigned) or (e.span.start, "range") in self.reported or self._history(e):
             return
         own = self._declared(e)
         if own is not None and rng.lo <= own.lo and own.hi <= rng.hi:

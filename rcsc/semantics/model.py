@@ -32,9 +32,9 @@ Value = Union[bool, int, float, str, dict, list]  # enums are member names; reco
 
 class _Compiled:
     """The root of the expression classes: a slot where `rcsc.semantics.evaluate` keeps
-    an expression's compiled closure."""
+    an expression's compiled closure, and one where `walk_expr` keeps its walk."""
 
-    __slots__ = ("_compiled",)
+    __slots__ = ("_compiled", "_walk")
 
 
 @dataclass(slots=True)
@@ -414,7 +414,17 @@ def walk_expr(e: Expr) -> list[Expr]:
     checks walk every expression several times, so this is a hot path: it
     dispatches on the exact class (no subclasses of the node classes exist)
     and returns a list.
+
+    The list is kept in the node (`_walk`) and returned again by later
+    calls: the check families walk the same conditions and jobs many times
+    (about five walks per expression).  The model is not changed after
+    `ast_to_model` (a node is replaced, never edited in place), and the
+    kept list starts with the node itself, so a copied node (which copies
+    the slot) walks afresh.  Callers must not change the list.
     """
+    memo = getattr(e, "_walk", None)
+    if memo is not None and memo[0] is e:
+        return memo
     out: list[Expr] = []
     add = out.append
     stack = [e]
@@ -445,6 +455,7 @@ def walk_expr(e: Expr) -> list[Expr]:
             stack.extend(reversed(x.items))
         elif isinstance(x, (Binary, Field, Call, Unary, IfExpr)):  # pragma: no cover - a subclass
             raise TypeError(f"walk_expr: subclass {t.__name__} of a node class")
+    e._walk = out
     return out
 
 
