@@ -294,3 +294,42 @@ def test_a_conversion_to_the_same_type_keeps_its_parentheses(ada_builds: Builds,
         proc = run_main(exe, design, scn, trace)
         assert proc.returncode == 0 and proc.stderr == "", proc.stderr[-3000:]
         assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())
+
+
+def test_an_if_that_only_assigns_values_to_themselves_builds(ada_builds: Builds, tmp_path: Path) -> None:
+    """`if c { x = x; }` is legal and does nothing; Ada got `if c then null;
+    end if;`, which GNAT warns has no effect, and -gnatwe refused the build
+    (differential tester, seed 3073).  The `if` now goes (its condition calls
+    no extern function); the trace still equals the simulator's."""
+    design = tmp_path / "nullif.rcs"
+    design.write_text(
+        "design nullif\n\n"
+        "const K: i32 = 3\n"
+        "gm y: f64 = 0.0 from env\n"
+        "gm x: f64 = 1.0 to env\n\n"
+        "controller TOP level 1 budget 100 us {\n"
+        "    reads y\n"
+        "    writes x\n"
+        "    status st: bool = false\n"
+        "    verb GO\n"
+        "    post {\n"
+        "        if (K == K) { st = st; }\n"
+        "        if y > 1.0 { x = x; }\n"
+        "        if y > 2.0 { x = y; } else { x = x; }\n"
+        "    }\n"
+        "    plan GO {\n"
+        "        R1: true | new -> done | st = not st;\n"
+        "    }\n"
+        "}\n\n"
+        "cpu main {\n    heartbeat 10 ms\n    schedule TOP\n}\n",
+        encoding="utf-8",
+    )
+    scn = tmp_path / "nullif.scn"
+    scn.write_text('scenario "nullif"\ncycles 4\n\nat 1: y = 2.5\nat 1: TOP.GO()\n', encoding="utf-8")
+    expected = reference_trace(design, scn)
+    for opt in ADA_OPTS:
+        exe = ada_builds.ada_binary(design, opt)
+        trace = tmp_path / f"trace{opt}.jsonl"
+        proc = run_main(exe, design, scn, trace)
+        assert proc.returncode == 0 and proc.stderr == "", proc.stderr[-3000:]
+        assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())

@@ -467,6 +467,14 @@ class AdaBackend(Target):
     def if_stmt(self, s: m.If, indent: int) -> list[str]:
         pad = "   " * indent
         out = []
+        if len(s.branches) == 1 and not s.else_body:
+            body = self.stmts(s.branches[0][1], indent)
+            if all(x.lstrip().startswith("null;") for x in body) and not self._calls(s.branches[0][0], self.impure):
+                # Nothing to do either way (`if c { x = x; }` is legal in a
+                # design): GNAT warns that such an `if` has no effect, and
+                # -gnatwe makes that an error.  The condition has no effect
+                # either (it calls no extern function), so only the comments stay.
+                return body
         for i, (cond, body) in enumerate(s.branches):
             out.append(f"{pad}{'if' if i == 0 else 'elsif'} {_strip(self.expr(cond))} then")
             out += self.stmts(body, indent + 1) or [pad + "   null;"]
@@ -475,6 +483,10 @@ class AdaBackend(Target):
             out += self.stmts(s.else_body, indent + 1) or [pad + "   null;"]
         out.append(f"{pad}end if;")
         return out
+
+    @staticmethod
+    def _calls(e: m.Expr, functions: set[str]) -> bool:
+        return any(isinstance(x, m.Call) and x.kind in ("fn", "extern") and x.func in functions for x in m.walk_expr(e))
 
     # ---- one controller -----------------------------------------------------------------
 
