@@ -26,6 +26,21 @@ once left such literals to rustc's inference.  Extern functions (declared,
 called from controllers, never from a pure `fn`) come from a random stream
 of their own.
 
+Arrays, controller types and function blocks come from streams of their own
+(a seed that draws none of them keeps its design).  About half the seeds
+declare arrays `[T; N]` of every element type (f64 with NaN and -0.0
+elements, arrays of arrays and of records, N a literal or an integer
+constant) as constants, inputs (the scenario sets them), Global Memory,
+status fields, locals, a record field and function parameters, and read
+them with constant indices, indices out of range and indices from inputs
+and `cycle` (out of range at run time), `len`, `sum`, `min_of` and
+`max_of`; they assign elements and whole arrays.  In about a third, one
+subordinate is a controller type instantiated two or three times under the
+same supervisor with its own value parameters and `gm` bindings; in about
+a third, controllers hold function blocks (`std.blocks`, and a block of the
+design's own with an array state) that they step in `pre`/`post` and job
+lists and whose outputs they read.
+
 `hostile=True` draws names that are reserved words or well-known macros of C
 and Rust, names that collide once joined with `_`, and very long names:
 problems of the targets' naming, found behind that option only.
