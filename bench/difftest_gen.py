@@ -210,7 +210,7 @@ class Names:
 class DesignGen:
     """One draw of a design and its scenario from a seed."""
 
-    def __init__(self, seed: int, hostile: bool = False) -> None:
+    def __init__(self, seed: int, hostile: bool = False, features: bool = True) -> None:
         self.rng = random.Random(seed)
         self.seed = seed
         self.names = Names(self.rng, hostile)
@@ -235,7 +235,8 @@ class DesignGen:
         # Arrays, controller types and function blocks: streams of their own,
         # so that a seed that draws none of them keeps its design.
         self.arr_rng = random.Random(seed ^ 0xA77A1)
-        self.use_arrays = self.arr_rng.random() < 0.55
+        self.use_arrays = self.arr_rng.random() < 0.55 and features
+        self.features = features
         self.arrays: dict[str, tuple[str, int]] = {}  # "[f64; 3]" -> (element type, length)
         self.arecords: dict[str, Record] = {}  # records with an array field (outside the main stream)
         self.aconsts: list[Var] = []
@@ -248,7 +249,7 @@ class DesignGen:
         self.aidx: list[str] = []  # extra integer index variables (`w.k`)
         self.ct_rng = random.Random(seed ^ 0xC7C7)
         self.blk_rng = random.Random(seed ^ 0xB10C)
-        self.use_blocks = self.blk_rng.random() < 0.4
+        self.use_blocks = self.blk_rng.random() < 0.4 and features
         self.user_blocks: list[str] = []
         self.bcalls: list[tuple[str, list[tuple[str, str]]]] = []  # callable instances of the current controller
 
@@ -724,7 +725,7 @@ class DesignGen:
         ct = self.ct_rng
         n = self.names
         cands = [c for c in self.ctrls[1:] if not c.subs and not c.simulator]
-        if not cands or ct.random() < 0.25:
+        if not cands or ct.random() < 0.25 or not self.features:
             return
         c = ct.choice(cands)
         parent = next(p for p in self.ctrls if c in p.subs)
@@ -1069,15 +1070,16 @@ class DesignGen:
         return "\n".join(lines) + "\n"
 
 
-def draw(seed: int, attempt: int, hostile: bool = False) -> Case:
-    """One draw, not checked."""
-    gen = DesignGen(seed * 1000 + attempt, hostile)
+def draw(seed: int, attempt: int, hostile: bool = False, features: bool = True) -> Case:
+    """One draw, not checked.  `features=False`: no arrays, controller types or
+    blocks -- the seed's design as the generator drew it before them."""
+    gen = DesignGen(seed * 1000 + attempt, hostile, features)
     name = f"d{seed}"
     design = gen.design(name)
     return Case(seed, design, gen.scenario(), attempt, name)
 
 
-def generate(seed: int, hostile: bool = False, max_attempts: int = 50) -> Case:
+def generate(seed: int, hostile: bool = False, max_attempts: int = 50, features: bool = True) -> Case:
     """The first draw of `seed` whose design checks without errors and whose scenario loads.
 
     Random conditions often hide a later rule behind an earlier one (E0506);
@@ -1085,7 +1087,7 @@ def generate(seed: int, hostile: bool = False, max_attempts: int = 50) -> Case:
     the next draw is taken.
     """
     for attempt in range(max_attempts):
-        case = draw(seed, attempt, hostile)
+        case = draw(seed, attempt, hostile, features)
         for _ in range(4):
             errors, dead = check_case(case)
             if not errors:
