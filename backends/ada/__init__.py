@@ -372,6 +372,10 @@ class AdaBackend(Target):
             return f"({a} {COMPARE[e.op]} {b})"
         if e.type.name in ("i32", "i64", "u32", "duration"):
             return f"Rcs_Num.{ARITH[e.op]}_{SUFFIX[e.type.name]} ({_strip(a)}, {_strip(b)})"
+        if e.op == "/" and isinstance(e.right, m.Const) and e.right.value == 0.0:
+            # `x / 0.0` (a block's `dt` given 0.0, say) is +/-inf or NaN; GNAT
+            # warns of a static zero divisor ("float division by zero").
+            b = self.same(e.right, b)
         return f"({a} {e.op} {b})"
 
     def ifexpr_expr(self, e: m.IfExpr) -> str:
