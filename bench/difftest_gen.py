@@ -26,6 +26,21 @@ once left such literals to rustc's inference.  Extern functions (declared,
 called from controllers, never from a pure `fn`) come from a random stream
 of their own.
 
+Arrays, controller types and function blocks come from streams of their own
+(a seed that draws none of them keeps its design).  About half the seeds
+declare arrays `[T; N]` of every element type (f64 with NaN and -0.0
+elements, arrays of arrays and of records, N a literal or an integer
+constant) as constants, inputs (the scenario sets them), Global Memory,
+status fields, locals, a record field and function parameters, and read
+them with constant indices, indices out of range and indices from inputs
+and `cycle` (out of range at run time), `len`, `sum`, `min_of` and
+`max_of`; they assign elements and whole arrays.  In about a third, one
+subordinate is a controller type instantiated two or three times under the
+same supervisor with its own value parameters and `gm` bindings; in about
+a third, controllers hold function blocks (`std.blocks`, and a block of the
+design's own with an array state) that they step in `pre`/`post` and job
+lists and whose outputs they read.
+
 `hostile=True` draws names that are reserved words or well-known macros of C
 and Rust, names that collide once joined with `_`, and very long names:
 problems of the targets' naming, found behind that option only.
@@ -73,6 +88,23 @@ STD_MATH = {
              ("hysteresis", ("f64", "bool", "f64", "f64")), ("approx_eq", ("f64", "f64", "f64")),
              ("within_pct", ("f64", "f64", "f64"))],
 }
+
+# std.blocks: name -> (parameters with values to draw from, inputs, outputs).
+_F = ["0.5", "0.01", "2.0", "0.0", "(-1.0)", "1e300", "0.1"]
+_D = ["10 ms", "20 ms", "50 ms", "0 ms", "1 s"]
+STD_BLOCKS = {
+    "PID": ([("kp", _F), ("ki", _F), ("kd", _F), ("lo", _F), ("hi", _F), ("dt", _F)], [("err", "f64")], [("y", "f64")]),
+    "LOWPASS": ([("tau", _F), ("dt", _F)], [("x", "f64")], [("y", "f64")]),
+    "RATE_LIMIT": ([("rise", _F), ("fall", _F), ("dt", _F)], [("x", "f64")], [("y", "f64")]),
+    "DEBOUNCE": ([("n", ["0", "1", "3", "(-1)"])], [("x", "bool")], [("q", "bool")]),
+    "TON": ([("pt", _D), ("dt", _D)], [("x", "bool")], [("et", "duration"), ("q", "bool")]),
+    "TOF": ([("pt", _D), ("dt", _D)], [("x", "bool")], [("et", "duration"), ("q", "bool")]),
+    "TP": ([("pt", _D), ("dt", _D)], [("x", "bool")], [("et", "duration"), ("q", "bool")]),
+    "R_TRIG": ([], [("x", "bool")], [("q", "bool")]),
+    "F_TRIG": ([], [("x", "bool")], [("q", "bool")]),
+}
+# f64 elements of array literals in the design (not the scenario): NaN, -0.0, infinity.
+ARRAY_FLOAT_EDGES = FLOAT_EDGES + ["(0.0 / 0.0)", "(-0.0)", "(1.0 / 0.0)", "(-(0.0 / 0.0))"]
 
 # Names that are fine in the language but reserved, predefined or macros in C
 # or Rust (or in the generated code's own vocabulary).
@@ -127,6 +159,19 @@ class Ctrl:
     locals: list[Var] = field(default_factory=list)
     writes: list[Var] = field(default_factory=list)
     reads: list[Var] = field(default_factory=list)
+    # Arrays (drawn from a stream of their own; the main stream never sees them).
+    alocals: list[Var] = field(default_factory=list)
+    astatus: list[Var] = field(default_factory=list)
+    awrites: list[Var] = field(default_factory=list)
+    areads: list[Var] = field(default_factory=list)
+    arecs: list[Var] = field(default_factory=list)  # locals of a record with an array field
+    # Function block instances: (instance, block, arguments, inputs, outputs).
+    blocks: list[tuple[str, str, str, list[tuple[str, str]], list[tuple[str, str]]]] = field(default_factory=list)
+    # A controller type: its name, value parameters, and its instances (name, arguments).
+    type_name: str = ""
+    tparams: list[tuple[str, str]] = field(default_factory=list)
+    instances: list[tuple[str, str]] = field(default_factory=list)
+    instance_of: "Ctrl | None" = None
 
 
 class Names:
@@ -165,7 +210,7 @@ class Names:
 class DesignGen:
     """One draw of a design and its scenario from a seed."""
 
-    def __init__(self, seed: int, hostile: bool = False) -> None:
+    def __init__(self, seed: int, hostile: bool = False, features: bool = True) -> None:
         self.rng = random.Random(seed)
         self.seed = seed
         self.names = Names(self.rng, hostile)
@@ -187,6 +232,26 @@ class DesignGen:
         # The math built-ins and `cycle` likewise: they wrap what the main
         # stream drew for an assignment, so a seed keeps its design otherwise.
         self.math_rng = random.Random(seed ^ 0xF10A7)
+        # Arrays, controller types and function blocks: streams of their own,
+        # so that a seed that draws none of them keeps its design.
+        self.arr_rng = random.Random(seed ^ 0xA77A1)
+        self.use_arrays = self.arr_rng.random() < 0.55 and features
+        self.features = features
+        self.arrays: dict[str, tuple[str, int]] = {}  # "[f64; 3]" -> (element type, length)
+        self.arecords: dict[str, Record] = {}  # records with an array field (outside the main stream)
+        self.aconsts: list[Var] = []
+        self.aenv: list[Var] = []
+        self.agm: list[Var] = []
+        self.afns: list[tuple[str, str, str, str]] = []  # (name, array type, index type, result)
+        self.len_consts: list[tuple[str, int]] = []
+        self.actx: list[tuple[str, str]] | None = None  # readable arrays of the current controller
+        self.atargets: list[tuple[str, str]] = []  # assignable arrays of the current controller
+        self.aidx: list[str] = []  # extra integer index variables (`w.k`)
+        self.ct_rng = random.Random(seed ^ 0xC7C7)
+        self.blk_rng = random.Random(seed ^ 0xB10C)
+        self.use_blocks = self.blk_rng.random() < 0.4 and features
+        self.user_blocks: list[str] = []
+        self.bcalls: list[tuple[str, list[tuple[str, str]]]] = []  # callable instances of the current controller
 
     # ---- types and values ------------------------------------------------------------
 
@@ -196,9 +261,11 @@ class DesignGen:
             pool += list(self.records) * 2
         return self.rng.choice(pool)
 
-    def literal(self, t: str) -> str:
+    def literal(self, t: str, rng: random.Random | None = None) -> str:
         """A constant expression of type t (literals, constants, constructors)."""
-        r = self.rng
+        r = rng or self.rng
+        if t in self.arrays:
+            return self.array_literal(t, r)
         if t == "bool":
             return r.choice(["true", "false"])
         if t in INT_TYPES:
@@ -209,8 +276,8 @@ class DesignGen:
             return r.choice(DURATIONS)
         if t in self.enums:
             return f"{t}.{r.choice(self.enums[t])}"
-        rec = self.records[t]
-        return f"{t}(" + ", ".join(f"{f} = {self.literal(ft)}" for f, ft in rec.fields) + ")"
+        rec = self.records[t] if t in self.records else self.arecords[t]
+        return f"{t}(" + ", ".join(f"{f} = {self.literal(ft, r)}" for f, ft in rec.fields) + ")"
 
     def const_value(self, t: str) -> str:
         """A constant's value: a literal, or an edge computed at compile time."""
@@ -237,6 +304,10 @@ class DesignGen:
         conversion, as a person would have to write it.
         """
         r = self.rng
+        if self.actx and self.arr_rng.random() < 0.3:
+            read = self.aread(t, scope)
+            if read:
+                return read
         vars_ = [v.name for v in scope if v.type == t]
         for v in scope:  # fields of records, nested ones too
             if v.type in self.records:
@@ -450,6 +521,12 @@ class DesignGen:
         r = self.rng
         lines = []
         for _ in range(n):
+            if self.bcalls and self.blk_rng.random() < 0.35:
+                lines.append(f"{indent}{self.bcall(scope)};")
+                continue
+            if self.atargets and self.arr_rng.random() < 0.35:
+                lines.append(f"{indent}{self.astmt(scope)};")
+                continue
             if depth > 0 and r.random() < 0.2:
                 self.budget = 6
                 lines.append(f"{indent}if {self.cond(scope, 2)} {{")
@@ -465,6 +542,251 @@ class DesignGen:
             else:
                 lines.append(f"{indent}{self.assign(targets, scope)};")
         return lines
+
+    # ---- arrays ---------------------------------------------------------------------
+
+    def array_type(self, nested: bool = True) -> str:
+        """An array type `[T; N]` (N a literal or an integer constant), registered in `self.arrays`."""
+        a = self.arr_rng
+        pool = ["f64"] * 4 + ["i32", "i32", "i64", "u32", "bool", "duration"] + list(self.enums) + list(self.records)
+        elem = a.choice(pool)
+        if nested and self.arrays and a.random() < 0.1:
+            elem = a.choice(sorted(self.arrays))  # an array of arrays
+        n = a.randint(1, 5)
+        size = str(n)
+        if self.len_consts and a.random() < 0.4:
+            size, n = a.choice(self.len_consts)
+        t = f"[{elem}; {size}]"
+        self.arrays[t] = (elem, n)
+        return t
+
+    def array_literal(self, t: str, r: random.Random, scenario: bool = False) -> str:
+        elem, n = self.arrays[t]
+        size = t.rsplit(";", 1)[1].strip()[:-1]
+
+        def one() -> str:
+            if elem == "f64":
+                return r.choice(FLOAT_EDGES if scenario else ARRAY_FLOAT_EDGES)
+            if elem in self.arrays:
+                return self.array_literal(elem, r, scenario)
+            return self.literal(elem, r)
+
+        if not scenario and r.random() < 0.3:
+            return f"[{one()}; {size}]"
+        return "[" + ", ".join(one() for _ in range(n)) + "]"
+
+    def index(self, n: int, scope: list[Var]) -> str:
+        """An index into an array of n elements: in range, out of range, or a
+        variable (an input the scenario sets to an edge) that may be either."""
+        a = self.arr_rng
+        ivars = [v.name for v in scope if v.type in INT_TYPES] + self.aidx
+        k = a.random()
+        if k < 0.3:
+            return str(a.randrange(n))
+        if k < 0.4:
+            return a.choice([str(n), "(-1)", "2147483647", "(-2147483648)", "4294967296", str(n + 1)])
+        if ivars and k < 0.85:
+            v = a.choice(ivars)
+            return v if a.random() < 0.7 else f"({v} {a.choice(['+', '-', '%'])} {a.randint(1, n + 1)})"
+        return a.choice(["cycle", f"(cycle % {n + 1})", f"(cycle - {n})"])
+
+    def aread(self, t: str, scope: list[Var]) -> str | None:
+        """An expression of type t that reads an array of the current controller."""
+        a = self.arr_rng
+        opts = []
+        for p, at in self.actx or []:
+            elem, n = self.arrays[at]
+            if elem == t:
+                opts += [("at", p, at)] * 3
+                if t in NUM_TYPES or t == "duration":
+                    opts += [("fold", p, at)] * 2
+            if elem in self.arrays and self.arrays[elem][0] == t:
+                opts.append(("at2", p, at))
+            if elem in self.records and any(ft == t for _, ft in self.records[elem].fields):
+                opts.append(("field", p, at))
+            if t == "i32":
+                opts.append(("len", p, at))
+            for name, ft, it, ret, _ in self.afns:
+                if ft == at and ret == t:
+                    opts.append(("fn", p, at))
+        if not opts:
+            return None
+        kind, p, at = a.choice(opts)
+        elem, n = self.arrays[at]
+        if kind == "at":
+            return f"{p}[{self.index(n, scope)}]"
+        if kind == "fold":
+            return f"{a.choice(['sum', 'min_of', 'max_of'])}({p})"
+        if kind == "at2":
+            return f"{p}[{self.index(n, scope)}][{self.index(self.arrays[elem][1], scope)}]"
+        if kind == "field":
+            f = a.choice([f for f, ft in self.records[elem].fields if ft == t])
+            return f"{p}[{self.index(n, scope)}].{f}"
+        if kind == "len":
+            return f"len({p})"
+        name, _, it, _, _ = a.choice([f for f in self.afns if f[1] == at and f[3] == t])
+        i = self.index(n, scope)
+        return f"{name}({p}, {it}({i}))"
+
+    def aval(self, at: str, scope: list[Var]) -> str:
+        """A whole array of type at: another array of that type, a literal, or a function's result."""
+        a = self.arr_rng
+        same = [p for p, t in self.actx or [] if t == at]
+        if same and a.random() < 0.5:
+            return a.choice(same)
+        return self.array_literal(at, a)
+
+    def astmt(self, scope: list[Var]) -> str:
+        """An assignment to an array: one element (an index in or out of range), or the whole."""
+        a = self.arr_rng
+        p, at = a.choice(self.atargets)
+        elem, n = self.arrays[at]
+        k = a.random()
+        if self.aidx and k < 0.1:
+            w = a.choice(self.aidx)
+            return f"{w} = ({w} + {a.choice(['1', '(-1)', '2147483647'])})"
+        if k < 0.7:
+            ops = ["="]
+            if elem in NUM_TYPES:
+                ops += ["+=", "-=", "*="]
+            elif elem == "duration":
+                ops += ["+=", "-="]
+            i = self.index(n, scope)
+            if elem in self.arrays:
+                return f"{p}[{i}] = {self.aval(elem, scope)}"
+            self.budget = 8
+            return f"{p}[{i}] {a.choice(ops)} {self.expr(elem, scope, 2)}"
+        return f"{p} = {self.aval(at, scope)}"
+
+    def bcall(self, scope: list[Var]) -> str:
+        """One step of a function block instance: inputs by name, in order, or none."""
+        b = self.blk_rng
+        inst, inputs = b.choice(self.bcalls)
+        self.budget = 8
+        args = [self.expr(t, scope, 2) for _, t in inputs]
+        k = b.random()
+        if k < 0.5:
+            return f"{inst}(" + ", ".join(f"{i} = {e}" for (i, _), e in zip(inputs, args)) + ")"
+        if k < 0.85:
+            return f"{inst}({', '.join(args)})"
+        return f"{inst}()"
+
+    def declare_arrays(self) -> None:
+        a = self.arr_rng
+        n = self.names
+        if a.random() < 0.4:
+            size = a.randint(1, 4)
+            self.len_consts.append((n.fresh("LEN", upper=True), size))
+        for _ in range(a.randint(0, 2)):
+            t = self.array_type()
+            self.aconsts.append(Var(n.fresh("KA", upper=True), t))
+        for _ in range(a.randint(0, 2)):
+            self.aenv.append(Var(n.fresh("ain"), self.array_type()))
+        if a.random() < 0.4:
+            rname = n.fresh("RecA")
+            self.arecords[rname] = Record(rname, [(n.fresh("xs"), self.array_type(nested=False)), (n.fresh("k"), "i32")])
+        for _ in range(a.randint(0, 2)):
+            at = self.array_type(nested=False)
+            elem, size = self.arrays[at]
+            it = a.choice(INT_TYPES)
+            if elem in NUM_TYPES or elem == "duration":
+                body = a.choice(["xs[i]", f"(xs[i] + {a.choice(['sum', 'min_of', 'max_of'])}(xs))", "xs[len(xs) - 1]",
+                                 "(max_of(xs) - xs[i])"])
+            else:
+                body = "xs[i]"
+            self.afns.append((n.fresh("afun"), at, it, elem, body))
+
+    def hierarchy_arrays(self) -> None:
+        a = self.arr_rng
+        n = self.names
+        for c in self.ctrls:
+            if c.instance_of:
+                continue
+            for _ in range(a.randint(0, 2)):
+                c.alocals.append(Var(n.fresh("aloc"), self.array_type()))
+            for _ in range(a.choice([0, 0, 1, 2])):
+                c.astatus.append(Var(n.fresh("ast"), self.array_type()))
+            if not c.type_name and a.random() < 0.4:
+                v = Var(n.fresh("aout"), self.array_type())
+                c.awrites.append(v)
+                self.agm.append(v)
+            if self.arecords and a.random() < 0.6:
+                c.arecs.append(Var(n.fresh("w"), a.choice(sorted(self.arecords))))
+        for c in self.ctrls:
+            src = c.instance_of or c
+            if c.instance_of:
+                continue
+            pool = self.aenv + [v for v in self.agm if v not in c.awrites]
+            src.areads = a.sample(pool, min(len(pool), a.randint(0, 2)))
+
+    def controller_type(self) -> None:
+        """One leaf controller becomes a controller type with two or three instances,
+        under the same supervisor, each with its own parameter values and outputs."""
+        ct = self.ct_rng
+        n = self.names
+        cands = [c for c in self.ctrls[1:] if not c.subs and not c.simulator]
+        if not cands or ct.random() < 0.25 or not self.features:
+            return
+        c = ct.choice(cands)
+        parent = next(p for p in self.ctrls if c in p.subs)
+        c.type_name = n.fresh("Ty")
+        c.tparams = [(n.fresh("k"), ct.choice(["f64", "f64", "i32", "i64", "u32", "bool", "duration"]))
+                     for _ in range(ct.randint(0, 3))]
+        for w in c.writes:  # the type writes through `gm` parameters named like its outputs
+            self.gm_out.remove(w)
+        names = [c.name] + [n.fresh("C", upper=True) for _ in range(ct.randint(1, 2))]
+        for name in names:
+            vals = [self.literal(t, ct) for _, t in c.tparams]
+            outs = []
+            for w in c.writes:
+                g = Var(n.fresh("out"), w.type)
+                self.gm_out.append(g)
+                outs.append(g.name)
+            params = [p for p, _ in c.tparams] + [w.name for w in c.writes]
+            values = vals + outs
+            if ct.random() < 0.5:
+                args = ", ".join(values)
+            else:
+                args = ", ".join(f"{p} = {v}" for p, v in zip(params, values))
+            c.instances.append((name, args))
+            if name != c.name:
+                clone = Ctrl(name, c.level, verbs=c.verbs, reports=c.reports, status=c.status, locals=c.locals,
+                             writes=c.writes, instance_of=c)
+                parent.subs.append(clone)
+                self.ctrls.append(clone)
+        c.own_outs = [g for g in self.gm_out[len(self.gm_out) - len(c.writes) * len(names):]]
+
+    def hierarchy_blocks(self) -> None:
+        b = self.blk_rng
+        n = self.names
+        if not self.use_blocks:
+            return
+        if self.use_arrays and b.random() < 0.6:
+            self.user_blocks.append(n.fresh("ACC", upper=True))
+        kinds = sorted(STD_BLOCKS) + self.user_blocks * 3
+        for c in self.ctrls:
+            if c.instance_of or b.random() < 0.4:
+                continue
+            for _ in range(b.randint(1, 2)):
+                kind = b.choice(kinds)
+                if kind in STD_BLOCKS:
+                    params, inputs, outputs = STD_BLOCKS[kind]
+                    vals = [(p, b.choice(vs)) for p, vs in params]
+                else:
+                    vals = [("g", b.choice(_F))]
+                    inputs = [("x", "f64"), ("i", "i32")]
+                    outputs = [("y", "f64")]
+                if b.random() < 0.5:
+                    args = ", ".join(v for _, v in vals)
+                else:
+                    args = ", ".join(f"{p} = {v}" for p, v in vals)
+                c.blocks.append((n.fresh("fb"), kind, args, inputs, outputs))
+
+    def user_block(self, name: str) -> list[str]:
+        """A block of the design's own, with an array state indexed by an input."""
+        return [f"block {name}(g: f64) {{", "    input x: f64 = 0.0", "    input i: i32 = 0",
+                "    state buf: [f64; 3] = [0.0, (-0.0), 1.0]", "    output y: f64 = 0.0", "    step {",
+                "        buf[i] = x * g;", "        y = sum(buf) + min_of(buf) - max_of(buf) + buf[i + 1];", "    }", "}"]
 
     # ---- declarations ---------------------------------------------------------------
 
@@ -493,6 +815,8 @@ class DesignGen:
             self.env.append(Var(n.fresh("in"), self.rtype(scalar_weight=8)))
         if not any(v.type in NUM_TYPES for v in self.env):
             self.env.append(Var(n.fresh("in"), r.choice(NUM_TYPES)))
+        if self.use_arrays:
+            self.declare_arrays()
 
     def hierarchy(self) -> None:
         r = self.rng
@@ -521,9 +845,20 @@ class DesignGen:
                     params = [(n.fresh("p"), self.rtype()) for _ in range(r.randint(0, 2))]
                     c.verbs.append((n.fresh("V", upper=True), params))
                 c.reports = [n.fresh("REP", upper=True) for _ in range(r.randint(0, 2))]
+        self.controller_type()
         for c in self.ctrls:
-            pool = self.env + [v for v in self.gm_out if v not in c.writes]
+            if c.instance_of:
+                continue
+            own = c.writes + getattr(c, "own_outs", [])
+            pool = self.env + [v for v in self.gm_out if v not in own]
             c.reads = r.sample(pool, min(len(pool), r.randint(1, 4)))
+        if self.use_arrays:
+            self.hierarchy_arrays()
+        self.hierarchy_blocks()
+        for c in self.ctrls:
+            if c.instance_of:
+                src = c.instance_of
+                c.reads, c.astatus = src.reads, src.astatus
 
     def function(self, name: str, params: list[tuple[str, str]], ret: str, index: int) -> str:
         # A function calls only functions declared before it: no recursion.
@@ -543,6 +878,10 @@ class DesignGen:
         out = []
         for _ in range(r.randint(0, 2)):
             out.append(self.assign(targets, scope))
+        if self.atargets and self.arr_rng.random() < 0.25:
+            out.append(self.astmt(scope))
+        if self.bcalls and self.blk_rng.random() < 0.2:
+            out.append(self.bcall(scope))
         for s in c.subs:
             if r.random() < 0.5:
                 verb, params = r.choice(s.verbs)
@@ -610,30 +949,53 @@ class DesignGen:
         out = [f"// generated by bench/difftest_gen.py, seed {self.seed}", f"design {name}", ""]
         if self.std_math:
             out += ["import std.math", ""]
+        if any(k in STD_BLOCKS for c in self.ctrls for _, k, _, _, _ in c.blocks):
+            out += ["import std.blocks", ""]
         for e, members in self.enums.items():
             out.append(f"enum {e} {{ {', '.join(members)} }}")
+        a = self.arr_rng
         for rec in self.records.values():
+            out.append(f"record {rec.name} {{ " + ", ".join(f"{f}: {t}" for f, t in rec.fields) + " }")
+        for lname, size in self.len_consts:
+            out.append(f"const {lname}: i32 = {size}")
+        for rec in self.arecords.values():
             out.append(f"record {rec.name} {{ " + ", ".join(f"{f}: {t}" for f, t in rec.fields) + " }")
         for cst in self.consts:
             out.append(f"const {cst.name}: {cst.type} = {self.const_value(cst.type)}")
+        for cst in self.aconsts:
+            out.append(f"const {cst.name}: {cst.type} = {self.literal(cst.type, a)}")
         for i, (fname, params, ret) in enumerate(self.fns):
             out.append(self.function(fname, params, ret, i))
+        for fname, at, it, ret, body in self.afns:
+            out.append(f"fn {fname}(xs: {at}, i: {it}) -> {ret} =\n    {body}")
         for ename, params, ret in self.externs:
             out.append(f"extern fn {ename}(" + ", ".join(f"{p}: {t}" for p, t in params) + f") -> {ret} budget 1 us")
+        for bname in self.user_blocks:
+            out += self.user_block(bname)
         for v in self.env:
             out.append(f"gm {v.name}: {v.type} = {self.literal(v.type)} from env")
+        for v in self.aenv:
+            out.append(f"gm {v.name}: {v.type} = {self.literal(v.type, a)} from env")
         for v in self.gm_out:
             out.append(f"gm {v.name}: {v.type} = {self.literal(v.type)}")
+        for v in self.agm:
+            out.append(f"gm {v.name}: {v.type} = {self.literal(v.type, a)}")
         out.append("")
         for c in self.ctrls:
+            if c.instance_of:
+                continue
             kind = "simulator" if c.simulator else "controller"
-            out.append(f"{kind} {c.name} level {c.level} budget 100 us {{")
+            if c.type_name:
+                tps = [f"{p}: {t}" for p, t in c.tparams] + [f"{w.name}: gm" for w in c.writes]
+                out.append(f"{kind} type {c.type_name}({', '.join(tps)}) level {c.level} budget 100 us {{")
+            else:
+                out.append(f"{kind} {c.name} level {c.level} budget 100 us {{")
             if c.subs:
                 out.append(f"    subordinates {', '.join(s.name for s in c.subs)}")
-            if c.reads:
-                out.append(f"    reads {', '.join(v.name for v in c.reads)}")
-            if c.writes:
-                out.append(f"    writes {', '.join(v.name for v in c.writes)}")
+            if c.reads or c.areads:
+                out.append(f"    reads {', '.join(v.name for v in c.reads + c.areads)}")
+            if c.writes or c.awrites:
+                out.append(f"    writes {', '.join(v.name for v in c.writes + c.awrites)}")
             for verb, params in c.verbs:
                 out.append(f"    verb {verb}" + (f"({', '.join(f'{p}: {t}' for p, t in params)})" if params else ""))
             if c.reports:
@@ -642,10 +1004,26 @@ class DesignGen:
                 out.append(f"    status {v.name}: {v.type} = {self.literal(v.type)}")
             for v in c.locals:
                 out.append(f"    local {v.name}: {v.type} = {self.literal(v.type)}")
+            for v in c.astatus:
+                out.append(f"    status {v.name}: {v.type} = {self.literal(v.type, a)}")
+            for v in c.alocals + c.arecs:
+                out.append(f"    local {v.name}: {v.type} = {self.literal(v.type, a)}")
+            for inst, bkind, bargs, _, _ in c.blocks:
+                out.append(f"    block {inst}: {bkind}({bargs})")
             targets = c.status + c.locals + c.writes
             scope = c.reads + targets
             for s in c.subs:  # the supervisor's view of a subordinate's status fields
                 scope = scope + [Var(f"{s.name}.{v.name}", v.type) for v in s.status]
+            scope += [Var(p, t) for p, t in c.tparams]  # a controller type's value parameters
+            for inst, _, _, _, outputs in c.blocks:
+                scope += [Var(f"{inst}.{o}", t) for o, t in outputs]
+            own = [(v.name, v.type) for v in c.alocals + c.astatus + c.awrites]
+            own += [(f"{w.name}.{self.arecords[w.type].fields[0][0]}", self.arecords[w.type].fields[0][1]) for w in c.arecs]
+            self.atargets = own
+            self.actx = own + [(v.name, v.type) for v in c.areads + self.aconsts]
+            self.actx += [(f"{s.name}.{v.name}", v.type) for s in c.subs for v in s.astatus]
+            self.aidx = [f"{w.name}.{self.arecords[w.type].fields[1][0]}" for w in c.arecs]
+            self.bcalls = [(inst, inputs) for inst, _, _, inputs, _ in c.blocks]
             for block in ("pre", "post"):
                 if r.random() < 0.8:
                     out.append(f"    {block} {{")
@@ -654,6 +1032,9 @@ class DesignGen:
             for verb, params in c.verbs:
                 out += self.plan(c, verb, params, scope, targets)
             out.append("}")
+            self.actx, self.atargets, self.aidx, self.bcalls = None, [], [], []
+            for iname, iargs in c.instances:
+                out.append(f"{kind} {iname}: {c.type_name}({iargs})")
             out.append("")
         order = list(self.ctrls)
         if r.random() < 0.7:
@@ -680,20 +1061,25 @@ class DesignGen:
             cand = [c.name for c in self.consts if c.type == v.type]
             value = r.choice(cand) if cand and r.random() < 0.3 else self.literal(v.type)
             events.append((r.randint(1, cycles), f"{v.name} = {value}"))
+        for v in self.aenv:
+            a = self.arr_rng
+            for _ in range(a.randint(0, 3)):
+                events.append((a.randint(1, cycles), f"{v.name} = {self.array_literal(v.type, a, scenario=True)}"))
         events.sort(key=lambda e: e[0])
         lines += [f"at {t}: {text}" for t, text in events]
         return "\n".join(lines) + "\n"
 
 
-def draw(seed: int, attempt: int, hostile: bool = False) -> Case:
-    """One draw, not checked."""
-    gen = DesignGen(seed * 1000 + attempt, hostile)
+def draw(seed: int, attempt: int, hostile: bool = False, features: bool = True) -> Case:
+    """One draw, not checked.  `features=False`: no arrays, controller types or
+    blocks -- the seed's design as the generator drew it before them."""
+    gen = DesignGen(seed * 1000 + attempt, hostile, features)
     name = f"d{seed}"
     design = gen.design(name)
     return Case(seed, design, gen.scenario(), attempt, name)
 
 
-def generate(seed: int, hostile: bool = False, max_attempts: int = 50) -> Case:
+def generate(seed: int, hostile: bool = False, max_attempts: int = 50, features: bool = True) -> Case:
     """The first draw of `seed` whose design checks without errors and whose scenario loads.
 
     Random conditions often hide a later rule behind an earlier one (E0506);
@@ -701,7 +1087,7 @@ def generate(seed: int, hostile: bool = False, max_attempts: int = 50) -> Case:
     the next draw is taken.
     """
     for attempt in range(max_attempts):
-        case = draw(seed, attempt, hostile)
+        case = draw(seed, attempt, hostile, features)
         for _ in range(4):
             errors, dead = check_case(case)
             if not errors:

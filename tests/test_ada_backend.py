@@ -333,3 +333,36 @@ def test_an_if_that_only_assigns_values_to_themselves_builds(ada_builds: Builds,
         proc = run_main(exe, design, scn, trace)
         assert proc.returncode == 0 and proc.stderr == "", proc.stderr[-3000:]
         assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())
+
+
+def test_a_float_division_by_a_zero_constant_builds_and_agrees(tmp_path: Path) -> None:
+    """`x / dt` with a block's `dt` given 0.0 is `x / 0.0` after substitution:
+    +inf, -inf or NaN as in the simulator; GNAT warned of the static zero
+    divisor ("float division by zero"), an error under -gnatwe (found by the
+    differential tester drawing std.blocks, seed 8036)."""
+    from c_build import gprbuild
+
+    design = tmp_path / "d.rcs"
+    design.write_text(
+        "design d\n\nimport std.blocks\n\n"
+        "gm y: f64 = 0.0 to env\n"
+        "gm z: f64 = 0.0 to env\n\n"
+        "simulator SIM level 0 budget 100 us {\n"
+        "    writes y, z\n"
+        "    block pid: PID(kp = 0.0, ki = 0.5, kd = -1.0, lo = -1e300, hi = 1e300, dt = 0.0)\n"
+        "    pre { pid(err = 1.0); y = pid.y; z = y / 0.0; }\n"
+        "}\n\n"
+        "cpu main {\n    heartbeat 10 ms\n    schedule SIM\n}\n",
+        encoding="utf-8",
+    )
+    scn = tmp_path / "d.scn"
+    scn.write_text('scenario "d"\ncycles 3\n', encoding="utf-8")
+    out = tmp_path / "ada"
+    generate(design, "ada", out)
+    exe = tmp_path / "prog"
+    gprbuild(out, "-O0", exe)
+    trace = tmp_path / "trace.jsonl"
+    proc = run_main(exe, design, scn, trace)
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr[-3000:]
+    expected = reference_trace(design, scn)
+    assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())

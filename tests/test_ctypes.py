@@ -211,3 +211,57 @@ cpu main { heartbeat 10 ms  schedule TOP, X, Y }
     # Each instance's own witness: its own Global Memory.
     assert sorted(n for d in overlaps for n in d.notes if n.startswith("witness")) == [
         "witness: a = 0.0 (fixed while the plan waits)", "witness: b = 0.0 (fixed while the plan waits)"]
+
+
+INT_LITERAL_ARGS = """design lits
+gm o1: f64 = 0.0 to env
+gm o2: u32 = 0 to env
+gm o3: f64 = 0.0 to env
+gm o4: u32 = 0 to env
+block B(g: f64) {
+    input x: f64 = 0.0
+    output y: f64 = 0.0
+    step { y = f64(g / 4) + x; }
+}
+controller type T(k: u32, g: f64, a: gm, b: gm) level 1 budget 100 us {
+    writes a, b
+    verb GO
+    block q: B(g = 2)
+    pre { q(0.0); a = f64(g / 4) + q.y; b = -k; }
+    plan GO { R0: true | new -> done; }
+}
+controller X1: T(k = 4294967295, g = 2, a = o1, b = o2)
+controller X2: T(k = 1, g = 2.0, a = o3, b = o4)
+controller TOP level 2 budget 100 us {
+    subordinates X1, X2
+    verb GO
+    plan GO { R0: true | new -> S1 | X1.GO(), X2.GO(); R1: X1.done and X2.done | S1 -> done; }
+}
+cpu MAIN {
+    heartbeat 10 ms
+    schedule TOP, X1, X2
+}
+"""
+
+
+def test_integer_literal_arguments_take_the_parameters_type(tmp_path: Path) -> None:
+    """A parameter `k: u32` given `4294967295` or `g: f64` given `2` is a value of
+    that type where it is used: `-k` wraps as a u32 (it was an out-of-range
+    literal, E0207) and `f64(g / 4)` is 0.5 (it was the i32 division 2 / 4),
+    in a controller type and in a block alike (found by the differential
+    tester drawing controller types).  A block's arguments are checked
+    against its parameters' types at the block instance."""
+    design = tmp_path / "lits.rcs"
+    design.write_text(INT_LITERAL_ARGS, encoding="utf-8")
+    result = check_path(str(design))
+    assert result.ok, [(d.code, d.message) for d in result.diags.items]
+    scn = tmp_path / "lits.scn"
+    scn.write_text('scenario "lits"\ncycles 2\n', encoding="utf-8")
+    last = json.loads(reference_trace(design, scn).decode().splitlines()[-1])
+    assert last["gm"] == {"o1": 1, "o2": 1, "o3": 1, "o4": 4294967295}
+    assert last["ctrl"]["X1"]["fields"]["q__y"] == 0.5
+    bad = tmp_path / "bad.rcs"
+    bad.write_text(INT_LITERAL_ARGS.replace("block B(g: f64)", "block B(g: u32)").replace("f64(g / 4) + x", "f64(g) + x")
+                   .replace("B(g = 2)", "B(g = -1)"), encoding="utf-8")
+    found = [d for d in check_path(str(bad)).diags.errors]
+    assert [d.code for d in found] == ["E0207", "E0207"] and all(d.span.text == "-1" for d in found)

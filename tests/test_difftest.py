@@ -39,9 +39,11 @@ def case_of(seed: int, hostile: bool = False):
     return generate(seed, hostile=hostile)
 
 # A fixed slice: under a minute on two idle cores.
+SLICE = [1000, 1001, 1002, 1003, 1004, 1005]
 # 5001 and 5069 once failed in Rust: clippy::almost_swapped, and `a + b as f64 < c`
-# (a `<` after a cast inside a sum opened generic arguments).
-SLICE = [1000, 1001, 1002, 1003, 1004, 1005, 5001, 5069]
+# (a `<` after a cast inside a sum opened generic arguments).  Drawn as they
+# were before the generator drew arrays, controller types and blocks.
+CLASSIC_SLICE = [5001, 5069]
 
 
 @pytest.mark.parametrize("hostile", [False, True], ids=["plain", "hostile-names"])
@@ -58,6 +60,10 @@ def test_same_seed_same_bytes() -> None:
         assert (a.design, a.scenario, a.attempt) == (b.design, b.scenario, b.attempt)
         assert draw(seed, 0).design == draw(seed, 0).design
     assert generate(1).design != generate(2).design
+    # Without the newer features a seed draws what it drew before them (the
+    # regression seeds of CLASSIC_SLICE keep their designs).
+    assert "controller type" not in draw(1000, 0, features=False).design
+    assert ": [" not in draw(1000, 0, features=False).design and ": [" in draw(1000, 0).design
 
 
 def test_generator_covers_the_language() -> None:
@@ -77,9 +83,31 @@ def test_generator_covers_the_language() -> None:
         "scenario command": r"^at \d+: C\d+\.V\d+\(", "scenario input": r"^at \d+: in\d+ = ",
         "compound assignment": r" [-+*]= ",
         "math built-ins": r"\b(sqrt|floor|ceil|trunc|round_even|copysign)\(", "cycle": r"\bcycle\b",
+        # arrays (docs/language.md §4.1)
+        "f64 array": r": \[f64; \w+\] = ", "int array": r": \[(i32|i64|u32); \w+\] = ",
+        "bool/duration array": r": \[(bool|duration); \w+\] = ", "array of arrays": r": \[\[",
+        "array length constant": r"; LEN\d+\]", "NaN element": r"\[(.*, )?\(0\.0 / 0\.0\)",
+        "-0.0 element": r"\[(.*, )?\(?-0\.0", "repeat literal": r"= \[[^\[\]]+; \w+\]$",
+        "index by an input": r"\w\[in\d+\]", "index by cycle": r"\w\[\(?cycle",
+        "constant index out of range": r"\w\[(2147483647|4294967296|\(-1\)|\(-2147483648\))\]",
+        "element write": r"^\s+[\w.]+\[[^\]]+\] = ", "element compound write": r"[\w.]\[[^\]]+\] [-+*]= ",
+        "whole array assignment": r"^\s+\w+ = \[", "len": r"\blen\(", "sum": r"\bsum\(",
+        "min_of": r"\bmin_of\(", "max_of": r"\bmax_of\(", "array const": r"^const KA\d+: \[",
+        "array env input": r"^gm ain\d+: \[.* from env$", "array gm output": r"^gm aout\d+: \[",
+        "array status field": r"^    status ast\d+: \[", "record with an array field": r"^record RecA\d+ \{ \w+: \[",
+        "array function parameter": r"^fn afun\d+\(xs: \[", "scenario array input": r"^at \d+: ain\d+ = \[",
+        # controller types and function blocks (docs/language.md §8.1, §8.2)
+        "controller type": r"^controller type Ty\d+\(\w+", "instance": r"^controller C\d+: Ty\d+\(",
+        "std.blocks": r"^import std\.blocks", "block instance": r"^    block fb\d+: [A-Z_]+\(",
+        "block call": r"^\s+fb\d+\(", "block output": r"\bfb\d+\.(y|q|et)\b", "own block": r"^block ACC\d+\(",
     }
     missing = [k for k, pat in wanted.items() if not re.search(pat, text, re.M)]
     assert missing == []
+    # A controller type is instantiated more than once in the designs that draw one.
+    for s in GEN_SEEDS:
+        design = case_of(s).design
+        for t in re.findall(r"^controller type (\w+)\(", design, re.M):
+            assert len(re.findall(rf"^controller \w+: {t}\(", design, re.M)) >= 2, design
 
 
 def test_hostile_names_are_hostile() -> None:
@@ -108,7 +136,7 @@ def test_minimiser_keeps_the_failure_and_validity() -> None:
 def test_slice_agrees_everywhere(tmp_path: Path) -> None:
     """A fixed set of seeds: every trace (gcc -O0/-O2, clang -O2 and ASan+UBSan,
     Rust debug/release) equals the simulator's; no compiler or clippy message."""
-    cases = [generate(s) for s in SLICE]
+    cases = [generate(s) for s in SLICE] + [generate(s, features=False) for s in CLASSIC_SLICE]
     findings = run_batch(cases, ["c", "rust"], jobs=2, workdir=tmp_path)
     assert findings == [], "\n\n".join(f"{f.line()}\n{f.detail}" for f in findings)
 

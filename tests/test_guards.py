@@ -583,3 +583,31 @@ def test_examples_analyse_fast() -> None:
         total += time.perf_counter() - t0
         assert not list(diags)
     assert total < 5.0  # the goal is 1 s (bench/bench_guards.py); generous for slow CI machines
+
+
+def test_witness_of_an_array_element_is_named_and_replays(tmp_path: Path) -> None:
+    """A rule condition on an array element (`ps[cycle].b`): the witness names
+    each element it sets (`ps[0].b`), parses back and replays; this once
+    stopped `rcsc check` with an internal error (found by the differential
+    tester's generator of arrays)."""
+    src = tmp_path / "arr.rcs"
+    src.write_text(
+        "design arr\n"
+        "record P { x: f64, b: bool }\n"
+        "gm o: f64 = 0.0 to env\n"
+        "controller Z level 1 budget 100 us {\n"
+        "    writes o\n"
+        "    verb GO\n"
+        "    local ps: [P; 2] = [P(x = 1.0, b = true), P(x = 2.0, b = false)]\n"
+        "    pre { o = ps[cycle].x; }\n"
+        "    plan GO { R0: ps[cycle].b | new -> done; }\n"
+        "}\n"
+        "cpu MAIN {\n    heartbeat 10 ms\n    schedule Z\n}\n",
+        encoding="utf-8",
+    )
+    result = check_path(str(src))
+    found = [d for d in result.diags if d.code == "E0516"]
+    assert len(found) == 1, [d.code for d in result.diags]
+    witness = found[0].data["witness"]
+    assert "ps[0].b" in witness and "ps[1].b" in witness, witness
+    replay(result.model, found[0])

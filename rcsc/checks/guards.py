@@ -130,7 +130,7 @@ from rcsc.front.source import Span
 from rcsc.checks.smt import _and as _z3_and
 from rcsc.checks.smt import _rational as _rational_of
 from rcsc.checks.smt import neg, real_of
-from rcsc.semantics.types import DURATION, EnumType, FloatType, RecordType, Type
+from rcsc.semantics.types import DURATION, ArrayType, EnumType, FloatType, RecordType, Type
 
 # The budget of one solver query.  The resource limit is deterministic (the
 # same answer on every machine; 2M units take about 0.8 s on a 2024 laptop);
@@ -1595,10 +1595,25 @@ def _name_type(design: Design, c: m.Controller, plan: m.Plan, key: tuple) -> tup
         return f"age({key[1]})", DURATION
     if kind == "subfield":
         var = design.controllers[key[1]].status_fields[key[2]]
-        return ".".join(key[1:]), _leaf_type(var.type, key[3:])
+        return _path_name(key[1:]), _leaf_type(var.type, key[3:])
     var = _var_of(design, c, plan, kind, key[1])
     prefix = "cmd." if kind == "param" else ""
-    return prefix + ".".join(key[1:]), _leaf_type(var.type, key[2:]) if var else None
+    return prefix + _path_name(key[1:]), _leaf_type(var.type, key[2:]) if var else None
+
+
+def _path_name(path: tuple) -> str:
+    """`w.xs[2].x` from ("w", "xs", 2, "x"): an int in a key is an array index."""
+    out = ""
+    for p in path:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else p)
+    return out
+
+
+def _path_parts(name: str) -> tuple:
+    """The inverse of `_path_name`."""
+    import re
+
+    return tuple(int(i) if i else f for f, i in re.findall(r"([^.\[\]]+)|\[(\d+)\]", name))
 
 
 def _var_of(design: Design, c: m.Controller, plan: m.Plan, kind: str, name: str) -> m.Var | None:
@@ -1616,6 +1631,10 @@ def _var_of(design: Design, c: m.Controller, plan: m.Plan, kind: str, name: str)
 
 def _leaf_type(t: Type, path: tuple) -> Type:
     for p in path:
+        if isinstance(p, int):
+            assert isinstance(t, ArrayType)
+            t = t.elem
+            continue
         assert isinstance(t, RecordType)
         t = t.field_type(p)  # type: ignore[assignment]
     return t
@@ -1631,7 +1650,7 @@ def witness_keys(design: Design, controller: str, plan_verb: str, witness: dict)
     subs = {u.name for u in c.subordinates}
     out = {}
     for name, value in witness.items():
-        parts = tuple(name.split("."))
+        parts = _path_parts(name)
         if name == "in_state":
             key = ("in_state",)
         elif name == "cycle":

@@ -140,6 +140,32 @@ def _gm_path(e: ast.Expr) -> list[ast.Ident] | None:
     return None
 
 
+def _has_int_literal(x) -> bool:
+    if isinstance(x, ast.IntLit):
+        return True
+    if isinstance(x, list):
+        return any(_has_int_literal(y) for y in x)
+    if isinstance(x, ast.Node):
+        return any(_has_int_literal(getattr(x, f.name)) for f in dataclasses.fields(x) if f.name != "span")
+    return False
+
+
+def _typed(value: ast.Expr, t: ast.TypeRef | None) -> ast.Expr:
+    """A value parameter's argument where the parameter is used.  Integer
+    literals take their type from where they stand (docs/language.md §4), so an
+    argument made with them is converted to the parameter's declared type:
+    with `k: u32 = 4294967295`, `-k` wraps as a u32 (not an out-of-range
+    literal), and with `g: f64 = 2`, `g / 4` is 0.5 wherever it stands (not an
+    i32 division) -- as with a typed constant."""
+    if t is None or t.elem is not None or t.name.name not in ("i32", "i64", "u32", "f64") or not _has_int_literal(value):
+        return value
+    call = ast.Call(value.span, ast.Ident(value.span, t.name.name), [ast.Arg(value.span, None, value)])
+    depth = getattr(value, "depth", None)
+    if depth is not None:
+        call.depth = depth + 1
+    return call
+
+
 class _TypeCopier(_Copier):
     def __init__(self, origin, clone, values: dict[str, ast.Expr], gms: dict[str, list[ast.Ident]], diags: Diagnostics) -> None:
         super().__init__(origin, clone)
@@ -269,7 +295,7 @@ def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerT
                 continue
             gms[p.name.name] = path
         else:
-            values[p.name.name] = arg.value
+            values[p.name.name] = _typed(arg.value, p.type)
     if not ok:
         return None
     origin = t.span.file
@@ -316,7 +342,7 @@ class _StepCopier(_Copier):
     def name(self, node):
         arg = self.inst.args.get(node.name)
         if arg is not None:
-            return arg.value
+            return _typed(arg.value, next((p.type for p in self.inst.t.params if p.name.name == node.name), None))
         if node.name in self.inst.members:
             return ast.Name(self.copy(node.span), self.inst.mangled(node.name))
         return None
@@ -368,6 +394,9 @@ def _lower_blocks(ctrl: ast.Controller, btypes: dict[str, ast.BlockType], used: 
             diags.add("E0265", extra[0], f"block `{t.name.name}` has more than one `step`", "second step")
         clone = instance_source(t.span.file, f"in block `{use.name.name}` of `{ctrl.name.name}` declared here", use.name.span)
         inst = _Inst(use, t, args, clone)
+        # Checked as constants of their parameters' types (E0204, E0206), as a
+        # controller type's are: their uses are converted to those types (`_typed`).
+        ctrl.param_args = ctrl.param_args + [(p, args[p.name.name].value) for p in t.params if p.name.name in args]
         insts[use.name.name] = inst
         cp = _StepCopier(inst, diags)
         for _, body in t.steps[:1]:

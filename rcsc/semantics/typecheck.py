@@ -209,7 +209,9 @@ class Checker:
             return None
         e = self.fold(e)
         if not isinstance(e, m.Const):
-            if not isinstance(e.type, RecordType):
+            # Records are not folded; an array of arrays of records, or of
+            # records, is evaluated whole here, as a record is.
+            if not isinstance(e.type, (RecordType, ArrayType)):
                 self.d.add("E0204", node.span, f"{what} must be a constant expression", "not known at compile time")
                 return None
             try:
