@@ -42,6 +42,19 @@ def test_trace_equals_simulator(ada_builds: Builds, pair, opt: str, tmp_path: Pa
     assert got == expected, first_difference(expected, got)
 
 
+def _agrees_at_every_level(ada_builds: Builds, design: Path, scn: Path, tmp_path: Path) -> bytes:
+    """Build `design` at every optimisation level, run it on `scn` and assert
+    the trace equals the simulator's (exit 0, nothing on stderr); the trace."""
+    expected = reference_trace(design, scn)
+    for opt in ADA_OPTS:
+        exe = ada_builds.ada_binary(design, opt)
+        trace = tmp_path / f"trace{opt}.jsonl"
+        proc = run_main(exe, design, scn, trace)
+        assert proc.returncode == 0 and proc.stderr == "", proc.stderr[-3000:]
+        assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())
+    return expected
+
+
 def test_the_main_program_takes_the_c_options(ada_builds: Builds, tmp_path: Path) -> None:
     """Same runtime, same options: `--cycles` and the timing table of every scheduled controller."""
     exe = ada_builds.ada_binary(CELL, "-O2")
@@ -253,14 +266,7 @@ def test_a_float_division_by_a_folded_zero_builds_and_agrees(ada_builds: Builds,
     )
     scn = tmp_path / "fdiv.scn"
     scn.write_text('scenario "fdiv"\ncycles 6\n\nat 1: y = 1.5\nat 1: TOP.GO()\nat 3: y = -0.0\nat 3: TOP.GO()\n', encoding="utf-8")
-    expected = reference_trace(design, scn)
-    assert b"inf" in expected.lower() or b"Infinity" in expected
-    for opt in ADA_OPTS:
-        exe = ada_builds.ada_binary(design, opt)
-        trace = tmp_path / f"trace{opt}.jsonl"
-        proc = run_main(exe, design, scn, trace)
-        assert proc.returncode == 0 and proc.stderr == "", proc.stderr[-3000:]
-        assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())
+    assert b"inf" in _agrees_at_every_level(ada_builds, design, scn, tmp_path).lower()
 
 
 def test_a_conversion_to_the_same_type_keeps_its_parentheses(ada_builds: Builds, tmp_path: Path) -> None:
@@ -287,13 +293,7 @@ def test_a_conversion_to_the_same_type_keeps_its_parentheses(ada_builds: Builds,
     )
     scn = tmp_path / "conv.scn"
     scn.write_text('scenario "conv"\ncycles 4\n\nat 1: y = 2.5\nat 1: TOP.GO()\n', encoding="utf-8")
-    expected = reference_trace(design, scn)
-    for opt in ADA_OPTS:
-        exe = ada_builds.ada_binary(design, opt)
-        trace = tmp_path / f"trace{opt}.jsonl"
-        proc = run_main(exe, design, scn, trace)
-        assert proc.returncode == 0 and proc.stderr == "", proc.stderr[-3000:]
-        assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())
+    _agrees_at_every_level(ada_builds, design, scn, tmp_path)
 
 
 def test_an_if_that_only_assigns_values_to_themselves_builds(ada_builds: Builds, tmp_path: Path) -> None:
@@ -326,13 +326,7 @@ def test_an_if_that_only_assigns_values_to_themselves_builds(ada_builds: Builds,
     )
     scn = tmp_path / "nullif.scn"
     scn.write_text('scenario "nullif"\ncycles 4\n\nat 1: y = 2.5\nat 1: TOP.GO()\n', encoding="utf-8")
-    expected = reference_trace(design, scn)
-    for opt in ADA_OPTS:
-        exe = ada_builds.ada_binary(design, opt)
-        trace = tmp_path / f"trace{opt}.jsonl"
-        proc = run_main(exe, design, scn, trace)
-        assert proc.returncode == 0 and proc.stderr == "", proc.stderr[-3000:]
-        assert trace.read_bytes() == expected, first_difference(expected, trace.read_bytes())
+    _agrees_at_every_level(ada_builds, design, scn, tmp_path)
 
 
 def test_a_float_division_by_a_zero_constant_builds_and_agrees(tmp_path: Path) -> None:

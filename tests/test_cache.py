@@ -71,17 +71,22 @@ def test_second_run_reads_the_cache_and_says_the_same(tmp_path: Path, name: str)
     assert '"code"' in reference  # the case has findings
 
 
+def _empty_entries(folder: Path) -> None:
+    """Rewrite every guard entry (with a valid checksum) to hold no findings."""
+    for path in _entries(folder):
+        doc = json.loads(path.read_text())
+        doc["payload"] = "[]"
+        doc["checksum"] = __import__("hashlib").sha256(b"[]").hexdigest()
+        path.write_text(json.dumps(doc))
+
+
 def test_the_cache_is_really_read(tmp_path: Path, capsys) -> None:
     """An entry rewritten (with a valid checksum) to hold no findings is believed:
     proof that the second run answers from the cache, not from the solver."""
     design = tmp_path / "d.rcs"
     shutil.copy(CASES / "W0515_order_dependent.rcs", design)
     assert "W0515" in _check(design, capsys)
-    for path in _entries(tmp_path / cache.FOLDER):
-        doc = json.loads(path.read_text())
-        doc["payload"] = "[]"
-        doc["checksum"] = __import__("hashlib").sha256(b"[]").hexdigest()
-        path.write_text(json.dumps(doc))
+    _empty_entries(tmp_path / cache.FOLDER)
     _forget_findings(tmp_path / cache.FOLDER)
     assert "W0515" not in _check(design, capsys)
 
@@ -94,11 +99,7 @@ def test_build_reads_the_cache_of_check(tmp_path: Path, capsys, monkeypatch) -> 
     design = tmp_path / "d.rcs"
     shutil.copy(CASES / "W0515_order_dependent.rcs", design)
     assert "W0515" in _check(design, capsys)
-    for path in _entries(tmp_path / cache.FOLDER):
-        doc = json.loads(path.read_text())
-        doc["payload"] = "[]"
-        doc["checksum"] = __import__("hashlib").sha256(b"[]").hexdigest()
-        path.write_text(json.dumps(doc))
+    _empty_entries(tmp_path / cache.FOLDER)
     build = ["build", str(design), "--target", "c", "--deny-warnings", "-o", str(tmp_path / "out")]
     assert main(build) == 0, capsys.readouterr().err
     monkeypatch.setenv("RCSC_NO_CACHE", "1")
