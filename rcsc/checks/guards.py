@@ -105,6 +105,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import time
 from dataclasses import dataclass, field, fields
 from types import SimpleNamespace
@@ -1611,8 +1612,6 @@ def _path_name(path: tuple) -> str:
 
 def _path_parts(name: str) -> tuple:
     """The inverse of `_path_name`."""
-    import re
-
     return tuple(int(i) if i else f for f, i in re.findall(r"([^.\[\]]+)|\[(\d+)\]", name))
 
 
