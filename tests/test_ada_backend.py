@@ -55,6 +55,13 @@ def _agrees_at_every_level(ada_builds: Builds, design: Path, scn: Path, tmp_path
     return expected
 
 
+def _single_cpu_design(tmp_path: Path, name: str, body: str) -> Path:
+    """`design NAME`, then `body`, then one CPU of 10 ms that schedules TOP, written to NAME.rcs."""
+    design = tmp_path / f"{name}.rcs"
+    design.write_text(f"design {name}\n\n{body}\ncpu main {{\n    heartbeat 10 ms\n    schedule TOP\n}}\n", encoding="utf-8")
+    return design
+
+
 def test_the_main_program_takes_the_c_options(ada_builds: Builds, tmp_path: Path) -> None:
     """Same runtime, same options: `--cycles` and the timing table of every scheduled controller."""
     exe = ada_builds.ada_binary(CELL, "-O2")
@@ -247,9 +254,7 @@ def test_a_float_division_by_a_folded_zero_builds_and_agrees(ada_builds: Builds,
     0.0: IEEE gives an infinity (or NaN for 0.0 / 0.0), as in the simulator,
     but GNAT warned of the static zero divisor and -gnatwe refused the build
     (found by the differential tester, seed 3026)."""
-    design = tmp_path / "fdiv.rcs"
-    design.write_text(
-        "design fdiv\n\n"
+    design = _single_cpu_design(tmp_path, "fdiv", (
         "const K: i32 = 3\n"
         "gm y: f64 = 0.0 from env\n"
         "gm x: f64 = 1.0 to env\n\n"
@@ -260,10 +265,8 @@ def test_a_float_division_by_a_folded_zero_builds_and_agrees(ada_builds: Builds,
         "    plan GO {\n"
         "        R1: true | new -> done | x = y / (if (K > K) then y else 0.0);\n"
         "    }\n"
-        "}\n\n"
-        "cpu main {\n    heartbeat 10 ms\n    schedule TOP\n}\n",
-        encoding="utf-8",
-    )
+        "}\n"
+    ))
     scn = tmp_path / "fdiv.scn"
     scn.write_text('scenario "fdiv"\ncycles 6\n\nat 1: y = 1.5\nat 1: TOP.GO()\nat 3: y = -0.0\nat 3: TOP.GO()\n', encoding="utf-8")
     assert b"inf" in _agrees_at_every_level(ada_builds, design, scn, tmp_path).lower()
@@ -274,9 +277,7 @@ def test_a_conversion_to_the_same_type_keeps_its_parentheses(ada_builds: Builds,
     type is the operand, but it stands where the call stood and keeps its
     parentheses; without them the Ada was `(--Rcs_Num.Same_F64 (...))`, a
     comment, and GNAT refused the build (differential tester, seed 3045)."""
-    design = tmp_path / "conv.rcs"
-    design.write_text(
-        "design conv\n\n"
+    design = _single_cpu_design(tmp_path, "conv", (
         "gm y: f64 = 0.0 from env\n"
         "gm x: f64 = 1.0 to env\n"
         "gm z: f64 = 1.0 to env\n\n"
@@ -287,10 +288,8 @@ def test_a_conversion_to_the_same_type_keeps_its_parentheses(ada_builds: Builds,
         "    plan GO {\n"
         "        R1: true | new -> done | x = ceil(-f64((-(-y)))), z = x - f64(-y);\n"
         "    }\n"
-        "}\n\n"
-        "cpu main {\n    heartbeat 10 ms\n    schedule TOP\n}\n",
-        encoding="utf-8",
-    )
+        "}\n"
+    ))
     scn = tmp_path / "conv.scn"
     scn.write_text('scenario "conv"\ncycles 4\n\nat 1: y = 2.5\nat 1: TOP.GO()\n', encoding="utf-8")
     _agrees_at_every_level(ada_builds, design, scn, tmp_path)
@@ -301,9 +300,7 @@ def test_an_if_that_only_assigns_values_to_themselves_builds(ada_builds: Builds,
     end if;`, which GNAT warns has no effect, and -gnatwe refused the build
     (differential tester, seed 3073).  The `if` now goes (its condition calls
     no extern function); the trace still equals the simulator's."""
-    design = tmp_path / "nullif.rcs"
-    design.write_text(
-        "design nullif\n\n"
+    design = _single_cpu_design(tmp_path, "nullif", (
         "const K: i32 = 3\n"
         "gm y: f64 = 0.0 from env\n"
         "gm x: f64 = 1.0 to env\n\n"
@@ -320,10 +317,8 @@ def test_an_if_that_only_assigns_values_to_themselves_builds(ada_builds: Builds,
         "    plan GO {\n"
         "        R1: true | new -> done | st = not st;\n"
         "    }\n"
-        "}\n\n"
-        "cpu main {\n    heartbeat 10 ms\n    schedule TOP\n}\n",
-        encoding="utf-8",
-    )
+        "}\n"
+    ))
     scn = tmp_path / "nullif.scn"
     scn.write_text('scenario "nullif"\ncycles 4\n\nat 1: y = 2.5\nat 1: TOP.GO()\n', encoding="utf-8")
     _agrees_at_every_level(ada_builds, design, scn, tmp_path)
