@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+import traceback
 from collections import Counter
 from pathlib import Path
 
@@ -76,12 +77,17 @@ def main(argv: list[str] | None = None) -> int:
             ran = seeds[:i]
             break
         t0 = time.monotonic()
-        batch = [generate(s, hostile=args.hostile_names) for s in seeds[i:i + args.batch]]
+        batch, crashed = [], []
+        for s in seeds[i:i + args.batch]:
+            try:
+                batch.append(generate(s, hostile=args.hostile_names))
+            except Exception:  # noqa: BLE001 - the checker crashed on a draw: a finding, and the run goes on
+                crashed.append(Finding(s, "crash", "rcsc check (generator)", traceback.format_exc()))
         gen_time += time.monotonic() - t0
         retries += sum(c.attempt for c in batch)
         for c in batch:
             cases[c.seed] = c
-        findings = run_batch(batch, targets, jobs=args.jobs)
+        findings = crashed + run_batch(batch, targets, jobs=args.jobs)
         for f in findings:
             kinds[f.kind] += 1
             failing.setdefault(f.seed, []).append(f)
@@ -92,9 +98,12 @@ def main(argv: list[str] | None = None) -> int:
     elapsed = time.monotonic() - start
     for seed, fs in sorted(failing.items()):
         case = cases.get(seed)
-        if case is None:  # a finding of a whole batch (seed -1)
-            out.mkdir(parents=True, exist_ok=True)
-            (out / "batch-findings.txt").write_text("\n\n".join(f"{f.where}:\n{f.detail}" for f in fs), encoding="utf-8")
+        if case is None:  # a finding of a whole batch (seed -1), or the checker crashed on a draw of the seed
+            folder = out / (f"seed{seed}" if seed >= 0 else "")
+            folder.mkdir(parents=True, exist_ok=True)
+            name = "findings.txt" if seed >= 0 else "batch-findings.txt"
+            (folder / name).write_text("\n\n".join(f"{f.where}:\n{f.detail}" for f in fs), encoding="utf-8")
+            print(f"seed {seed}: findings in {folder / name}")
             continue
         small = None
         if args.minimise:

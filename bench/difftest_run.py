@@ -89,7 +89,7 @@ def prepare(case: Case, base: Path) -> Prepared:
     from rcsc.sim.runner import run_scenario
     from rcsc.front.scenario import text_to_scenario
     from rcsc.front.source import SourceFile
-    from rcsc.sim.trace import to_jsonl
+    from rcsc.sim.trace import run_to_jsonl
 
     folder = base / case.name
     folder.mkdir(parents=True, exist_ok=True)
@@ -119,7 +119,7 @@ def prepare(case: Case, base: Path) -> Prepared:
     p.events.write_text(event_text(result.model, sc, built_controllers(result.model, BuildOptions())), encoding="utf-8")
     try:
         run = run_scenario(result.model, sc)
-        p.reference = to_jsonl(result.model, run.snapshots).encode("utf-8")
+        p.reference = run_to_jsonl(result.model, run).encode("utf-8")
     except Exception as exc:  # a crash of the simulator is a finding, not the end of the run
         p.findings.append(Finding(case.seed, "crash", "rcsc sim", f"{type(exc).__name__}: {exc}"))
     return p
@@ -134,20 +134,45 @@ def first_difference(ref: bytes, got: bytes) -> str:
 
 
 def run_program(p: Prepared, exe: Path, where: str) -> list[Finding]:
+    """Run one Main Program (or, for a design of several CPUs, its launcher
+    `run_<design>` in lockstep: each CPU waits for the samples it reads, so
+    the merged trace is the simulator's) on the case's scenario; compare."""
     trace = exe.with_suffix(".jsonl")
     env = dict(os.environ, ASAN_OPTIONS="detect_leaks=1", UBSAN_OPTIONS="print_stacktrace=1")
+    if exe.name.startswith("run_"):
+        argv = [str(exe), "--lockstep", "--no-timing"]
+    else:
+        argv = [str(exe), "--fast", "--no-console", "--no-timing"]
     try:
-        proc = subprocess.run([str(exe), "--fast", "--no-console", "--no-timing", "--scenario", str(p.events),
-                               "--trace", str(trace)], capture_output=True, text=True, timeout=120, env=env,
-                              stdin=subprocess.DEVNULL)
+        proc = subprocess.run(argv + ["--scenario", str(p.events), "--trace", str(trace)], capture_output=True, text=True,
+                              timeout=120, env=env, stdin=subprocess.DEVNULL)
     except subprocess.TimeoutExpired:
         return [Finding(p.case.seed, "fail", where, "timed out after 120 s")]
     out = []
-    if proc.returncode != 0 or proc.stderr:
+    # The launcher names the process of each CPU on stderr; anything else there is a finding.
+    stderr = "".join(x for x in proc.stderr.splitlines(keepends=True) if not _LAUNCH_NOTE.match(x))
+    if proc.returncode != 0 or stderr:
         out.append(Finding(p.case.seed, "fail", where, f"exit {proc.returncode}\n{proc.stderr[-3000:]}"))
     got = trace.read_bytes() if trace.exists() else b""
     if got != p.reference:
         out.append(Finding(p.case.seed, "disagree", where, first_difference(p.reference, got)))
+    return out
+
+
+_LAUNCH_NOTE = re.compile(r"^rcs: CPU \S+ is process \d+$")
+
+
+def c_programs(src: Path) -> list[tuple[str, list[str]]]:
+    """The programs of a generated C folder, from its Makefile: (binary, sources)
+    for each CPU's Main Program and, with several CPUs, the launcher."""
+    text = (src / "Makefile").read_text(encoding="utf-8")
+    sources = re.search(r"^SOURCES = (.*)$", text, re.M).group(1).split()
+    out = []
+    for binary, deps in re.findall(r"^([\w.-]+): ((?:\S+\.o ?)+(?:\$\(OBJECTS\))?)$", text, re.M):
+        files = []
+        for d in deps.split():
+            files += sources if d == "$(OBJECTS)" else [d[:-2] + ".c"]
+        out.append((binary, files))
     return out
 
 
@@ -185,30 +210,40 @@ def _runtime_object(src: Path, cc: str, flags: list[str], source: Path) -> tuple
 
 
 def c_case(p: Prepared, configs: list[str]) -> list[Finding]:
-    """Build each C configuration of a generated case and run it."""
+    """Build each C configuration of a generated case (every program of its
+    Makefile, the runtime files from their cached objects) and run it."""
     src = p.folder / "c"
     out = []
-    sources = sorted(src.glob("*.c"))
+    programs = c_programs(src)
     for config in configs:
         cc, flags = C_CONFIGS[config]
-        exe = p.folder / f"{config}.bin"
-        objects, err = [], ""
-        for s in sources:
-            if s.name.startswith("rcs_"):
-                obj, err = _runtime_object(src, cc, flags, s)
-                if obj is None:
-                    break
-                objects.append(str(obj))
-        if err:
-            out.append(Finding(p.case.seed, "warning", config, err[-4000:]))
+        folder = p.folder / config
+        folder.mkdir(exist_ok=True)
+        failed = False
+        for binary, files in programs:
+            objects, err = [], ""
+            for s in files:
+                if s.startswith("rcs_"):
+                    obj, err = _runtime_object(src, cc, flags, src / s)
+                    if obj is None:
+                        break
+                    objects.append(str(obj))
+            if err:
+                out.append(Finding(p.case.seed, "warning", config, err[-4000:]))
+                failed = True
+                break
+            design_sources = [str(src / s) for s in files if not s.startswith("rcs_")]
+            proc = subprocess.run([cc, *STRICT, *flags, "-I", str(src), "-o", str(folder / binary), *design_sources, *objects, "-lm"],
+                                  capture_output=True, text=True)
+            if proc.returncode != 0 or proc.stderr:
+                kind = "warning" if proc.returncode == 0 or "-Werror" in proc.stderr or "error: " in proc.stderr else "fail"
+                out.append(Finding(p.case.seed, kind, config, proc.stderr[-4000:]))
+                failed = True
+                break
+        if failed:
             continue
-        design_sources = [str(s) for s in sources if not s.name.startswith("rcs_")]
-        proc = subprocess.run([cc, *STRICT, *flags, "-I", str(src), "-o", str(exe), *design_sources, *objects, "-lm"],
-                              capture_output=True, text=True)
-        if proc.returncode != 0 or proc.stderr:
-            kind = "warning" if proc.returncode == 0 or "-Werror" in proc.stderr or "error: " in proc.stderr else "fail"
-            out.append(Finding(p.case.seed, kind, config, proc.stderr[-4000:]))
-            continue
+        launcher = [b for b, _ in programs if b.startswith("run_")]
+        exe = folder / (launcher[0] if launcher else programs[0][0])
         out += run_program(p, exe, config)
     return out
 
@@ -220,20 +255,30 @@ def ada_generate(p: Prepared) -> list[Finding]:
 
 
 def ada_case(p: Prepared) -> list[Finding]:
-    """Build each Ada configuration of a generated case with gprbuild and run it."""
+    """Build each Ada configuration of a generated case with gprbuild and run it
+    (with several CPUs: every CPU's program and the C launcher, in lockstep)."""
     src = p.folder / "ada"
     out = []
+    projects = ["rcs_build.gpr"] + (["rcs_launch.gpr"] if (src / "rcs_launch.gpr").exists() else [])
     for config, opt in ADA_CONFIGS.items():
-        proc = subprocess.run(["gprbuild", "-q", "-P", "rcs_build.gpr", f"-XRCS_OPT={opt}"], cwd=src, capture_output=True, text=True)
-        text = proc.stdout + proc.stderr
-        if proc.returncode != 0 or "warning" in text:
-            out.append(Finding(p.case.seed, "warning" if "warning" in text else "fail", config, text[-4000:]))
+        failed = False
+        for project in projects:
+            proc = subprocess.run(["gprbuild", "-q", "-P", project, f"-XRCS_OPT={opt}"], cwd=src, capture_output=True, text=True)
+            text = proc.stdout + proc.stderr
+            if proc.returncode != 0 or "warning" in text:
+                out.append(Finding(p.case.seed, "warning" if "warning" in text else "fail", config, text[-4000:]))
+                failed = True
+                break
+        if failed:
             continue
-        (main,) = re.findall(r'for Executable \("[^"]+"\) use "([^"]+)";', (src / "rcs_build.gpr").read_text(encoding="utf-8"))
-        exe = p.folder / f"{config}.bin"
-        exe.write_bytes((src / main).read_bytes())
-        exe.chmod(0o755)
-        out += run_program(p, exe, config)
+        mains = re.findall(r'for Executable \("[^"]+"\) use "([^"]+)";', (src / "rcs_build.gpr").read_text(encoding="utf-8"))
+        launcher = [x.name for x in src.glob("run_*") if "." not in x.name]
+        folder = p.folder / config
+        folder.mkdir(exist_ok=True)
+        for name in mains + launcher:  # copies: the next level rebuilds the same files
+            (folder / name).write_bytes((src / name).read_bytes())
+            (folder / name).chmod(0o755)
+        out += run_program(p, folder / (launcher[0] if launcher else mains[0]), config)
     return out
 
 
@@ -263,6 +308,11 @@ def rust_generate(prepared: list[Prepared], base: Path) -> tuple[list[Prepared],
         "[workspace]\nresolver = \"2\"\nmembers = [" + ", ".join(f'"{m}"' for m in sorted(members)) + "]\n\n" + (profiles or ""),
         encoding="utf-8")
     return list(members.values()), out
+
+
+def rust_programs(crate: Path) -> list[str]:
+    """The binaries of a generated crate (each CPU's Main Program and, with several CPUs, the launcher)."""
+    return re.findall(r'^\[\[bin\]\]\nname = "([^"]+)"', (crate / "Cargo.toml").read_text(encoding="utf-8"), re.M)
 
 
 RUST_STEPS = {"rust-debug": ["build"], "rust-release": ["build", "--release"], "clippy": ["clippy", "--all-targets"]}
@@ -306,10 +356,12 @@ def rust_batch(prepared: list[Prepared], base: Path, jobs: int, steps: tuple[str
     for name, p in members.items():
         if name in failed:
             continue
+        bins = rust_programs(ws / name)
+        launcher = [b for b in bins if b.startswith("run_")]
         for config, profile in (("rust-debug", "debug"), ("rust-release", "release")):
             if config not in steps:
                 continue
-            exe = base / "cargo-target" / profile / f"{name}_MAIN"
+            exe = base / "cargo-target" / profile / (launcher[0] if launcher else bins[0])
             if exe.exists():
                 out += run_program(p, exe, config)
             else:

@@ -415,7 +415,7 @@ def _run_sim(args: argparse.Namespace) -> int:
     # Several CPUs: the JSON-lines trace has one line per CPU cycle; CSV and
     # VCD show the observer's view (what expectations see) per base tick.
     if fmt == "jsonl":
-        text = trace.cycles_to_jsonl(design, run.cpu_cycles) if len(design.cpus) > 1 else trace.to_jsonl(design, run.trace_snapshots)
+        text = trace.run_to_jsonl(design, run)
     elif fmt == "csv":
         text = trace.to_csv(design, run.snapshots)
     else:

@@ -24,7 +24,7 @@ from rcsc.driver import check_path
 from rcsc.sim.runner import run_scenario
 from rcsc.front.scenario import text_to_scenario
 from rcsc.front.source import SourceFile
-from rcsc.sim.trace import to_jsonl
+from rcsc.sim.trace import run_to_jsonl
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -119,7 +119,7 @@ def reference_trace(design: Path, scn: Path) -> bytes:
         sc = text_to_scenario(SourceFile(str(scn), scn.read_text(encoding="utf-8")), result.model, result.diags)
         assert sc is not None, f"{scn} does not load"
         run = run_scenario(result.model, sc)
-        _REFERENCE[scn] = to_jsonl(result.model, run.trace_snapshots).encode("utf-8")
+        _REFERENCE[scn] = run_to_jsonl(result.model, run).encode("utf-8")
     return _REFERENCE[scn]
 
 

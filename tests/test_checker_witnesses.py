@@ -142,3 +142,30 @@ def test_division_by_a_variable_is_decided(tmp_path) -> None:
     assert "W0518" not in codes, [d.message for d in result.diags]
     found = [d for d in result.diags if d.code == "W0525"]
     assert found and all(d.data["witness"]["n"] == 0 for d in found)
+
+
+def test_a_real_beyond_the_f64_range_is_an_infinity_in_the_witness(tmp_path) -> None:
+    """The solver reasons about f64 values as reals: a witness may need a real
+    larger than the largest finite f64 (here `x / 2.0` above it).  It reads as
+    +inf (what the real rounds to), where the checker once stopped with an
+    internal error (seed 4060 of the differential tester)."""
+    src = tmp_path / "big.rcs"
+    src.write_text(
+        "design d\n\n"
+        "gm x: f64 = 0.0 from env\n\n"
+        "controller TOP level 1 budget 1 ms {\n"
+        "    reads x\n"
+        "    local k: i32 = 0\n"
+        "    verb GO\n"
+        "    plan GO {\n"
+        "        R0: x / 2.0 > 1.7976931348623157e308 | new -> done | k = k + 1;\n"
+        "        R1: otherwise | new -> done;\n"
+        "    }\n"
+        "}\n\n"
+        "cpu main {\n    heartbeat 10 ms\n    schedule TOP\n}\n",
+        encoding="utf-8",
+    )
+    result = check_path(str(src))
+    (d,) = [d for d in result.diags if d.code == "W0525"]
+    assert d.data["witness"] == {"k": 2147483647, "x": float("inf")}
+    assert "x = inf" in "\n".join(d.notes)

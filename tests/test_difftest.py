@@ -100,6 +100,11 @@ def test_generator_covers_the_language() -> None:
         "controller type": r"^controller type Ty\d+\(\w+", "instance": r"^controller C\d+: Ty\d+\(",
         "std.blocks": r"^import std\.blocks", "block instance": r"^    block fb\d+: [A-Z_]+\(",
         "block call": r"^\s+fb\d+\(", "block output": r"\bfb\d+\.(y|q|et)\b", "own block": r"^block ACC\d+\(",
+        # rates and CPUs (docs/language.md §9.8, §10)
+        "several CPUs": r"^cpu \w+ \{\n    heartbeat \d+ ms\n    schedule [^\n]+\n\}\n\ncpu ",
+        "divided rate": r" period \d+ ms \{$", "age of a GM variable": r"\bage\((in|out)\d+\)",
+        "age of a subordinate": r"\bage\(C\d+\)|\bC\d+\.age\b", "freeze": r"^at \d+: freeze \w+$",
+        "stop a CPU": r"^at \d+: stop CPU\d+$",
     }
     missing = [k for k, pat in wanted.items() if not re.search(pat, text, re.M)]
     assert missing == []

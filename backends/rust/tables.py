@@ -264,7 +264,8 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
     for mb in members:
         mb["decl"] = field_decl(f"{mb['name']}: {mb['type']}", 1)
     ext_type = "ExternsImpl" if any(f.extern for f in d.functions.values()) else "NoExterns"
-    uses_ext = any(tg.step_uses_ext.get(c.name) for c in ctrls)
+    # Only the controllers this CPU steps call externs through `self.ext`.
+    uses_ext = any(tg.step_uses_ext.get(c.name) for c in ctrls if c in schedule)
     ext_init = "ExternsImpl::default()" if ext_type == "ExternsImpl" else "NoExterns"
     init = [("buf", Atom("Buffers::new()"))] + ([("ext", Atom(ext_init))] if uses_ext else []) + [(mb["name"], Atom(f"{mb['type']}::new()")) for mb in members]
     if deploy:

@@ -130,6 +130,7 @@ from rcsc.checks.smt import (
 from rcsc.front.source import Span
 from rcsc.checks.smt import _and as _z3_and
 from rcsc.checks.smt import _rational as _rational_of
+from rcsc.checks.smt import to_f64
 from rcsc.checks.smt import neg, real_of
 from rcsc.semantics.types import DURATION, ArrayType, EnumType, FloatType, RecordType, Type
 
@@ -618,7 +619,7 @@ class _Analysis:
                 if got is None:
                     return model
                 model = got
-            v = float(_rational_of(model.eval(t.r, model_completion=True)))
+            v = to_f64(_rational_of(model.eval(t.r, model_completion=True)))
             for digits in (0, 1, 2, 3):
                 r = round(v, digits)
                 if r == v:

@@ -808,12 +808,22 @@ def _rational(t) -> Fraction:
     raise ValueError(f"not a number: {t}")
 
 
+def to_f64(x: Fraction) -> float:
+    """The f64 nearest to a real of a model: beyond the largest finite f64 a
+    real rounds to an infinity, as the f64 arithmetic of the targets does
+    (`float()` of a `Fraction` rounds correctly but raises there)."""
+    try:
+        return float(x)
+    except OverflowError:
+        return math.inf if x > 0 else -math.inf
+
+
 def concrete(model: z3.ModelRef, v, t: Type | None, members: tuple[str, ...] = ()):
     """The Python value (as the simulator holds it) of an encoded value in `model`."""
     if isinstance(v, F):
         if z3.is_true(model.eval(v.nan, model_completion=True)):
             return math.nan
-        return float(_rational(model.eval(v.r, model_completion=True)))
+        return to_f64(_rational(model.eval(v.r, model_completion=True)))
     if isinstance(v, Rec):
         return {name: concrete(model, v[name], ft) for name, ft in v.rtype.fields}
     val = model.eval(v, model_completion=True)

@@ -171,6 +171,15 @@ def cycles_to_jsonl(design: m.Design, snaps: list[CpuSnapshot]) -> str:
     return "".join(cpu_jsonl_line(design, s) + "\n" for s in ordered)
 
 
+def run_to_jsonl(design: m.Design, run) -> str:
+    """The JSON-lines trace of a scenario run (a `rcsc.sim.runner` result), as
+    `rcsc sim` writes it and the compiled Main Programs must: per cycle on one
+    CPU (up to a `stop`), per CPU cycle with several."""
+    if len(design.cpus) > 1:
+        return cycles_to_jsonl(design, run.cpu_cycles)
+    return to_jsonl(design, run.trace_snapshots)
+
+
 # ---- flat columns: CSV and VCD ---------------------------------------------------
 
 
