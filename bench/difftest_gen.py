@@ -41,6 +41,17 @@ a third, controllers hold function blocks (`std.blocks`, and a block of the
 design's own with an array state) that they step in `pre`/`post` and job
 lists and whose outputs they read.
 
+Verbs take array parameters (the supervisor passes a whole array, a
+literal or a function's result; the scenario passes literals to the root),
+functions return arrays, a simulator may be a `simulator type` with
+instances, and a supervisor reads its subordinates' block outputs
+(`SUB.INSTANCE__OUTPUT`).  Rates and CPUs come from a stream of their own:
+in about half the seeds the controllers are placed on one to three CPUs
+with harmonic heartbeats (5 to 500 ms), a third of them run at a divided
+rate (`period`), conditions and statements read `age(...)` of Global Memory
+and of subordinates, and the scenario (counting base ticks) freezes a
+controller or stops a CPU.
+
 `hostile=True` draws names that are reserved words or well-known macros of C
 and Rust, names that collide once joined with `_`, and very long names:
 problems of the targets' naming, found behind that option only.
@@ -243,6 +254,7 @@ class DesignGen:
         self.aenv: list[Var] = []
         self.agm: list[Var] = []
         self.afns: list[tuple[str, str, str, str]] = []  # (name, array type, index type, result)
+        self.arfns: list[tuple[str, str, str, str]] = []  # functions returning an array: (name, array type, element, body)
         self.len_consts: list[tuple[str, int]] = []
         self.actx: list[tuple[str, str]] | None = None  # readable arrays of the current controller
         self.atargets: list[tuple[str, str]] = []  # assignable arrays of the current controller
@@ -638,6 +650,12 @@ class DesignGen:
         """A whole array of type at: another array of that type, a literal, or a function's result."""
         a = self.arr_rng
         same = [p for p, t in self.actx or [] if t == at]
+        fns = [(f, elem) for f, t, elem, _ in self.arfns if t == at]
+        if fns and a.random() < 0.35:
+            f, elem = a.choice(fns)
+            arg = a.choice(same) if same and a.random() < 0.7 else self.array_literal(at, a)
+            self.budget = 4
+            return f"{f}({arg}, {self.expr(elem, scope, 1)})"
         if same and a.random() < 0.5:
             return a.choice(same)
         return self.array_literal(at, a)
@@ -701,6 +719,24 @@ class DesignGen:
             else:
                 body = "xs[i]"
             self.afns.append((n.fresh("afun"), at, it, elem, body))
+        for _ in range(a.choice([0, 1, 1, 2])):
+            # A function whose result is an array: each element from the
+            # parameter's elements and a scalar, in or out of order.
+            at = self.array_type(nested=False)
+            elem, size = self.arrays[at]
+            if elem not in NUM_TYPES and elem != "duration":
+                continue
+            parts = []
+            for i in range(size):
+                j = a.randrange(size)
+                if elem == "duration":
+                    parts.append(a.choice([f"xs[{i}]", f"(xs[{j}] + k)", "k", f"(k - xs[{i}])"]))
+                else:
+                    parts.append(a.choice([f"xs[{i}]", f"(xs[{j}] + k)", "k", f"(xs[{i}] * k)", f"(k - xs[{j}])"]))
+            body = "[" + ", ".join(parts) + "]"
+            if a.random() < 0.3:
+                body = f"(if sum(xs) > k then xs else {body})"
+            self.arfns.append((n.fresh("arfun"), at, elem, body))
 
     def hierarchy_arrays(self) -> None:
         a = self.arr_rng
@@ -724,17 +760,25 @@ class DesignGen:
                 continue
             pool = self.aenv + [v for v in self.agm if v not in c.awrites]
             src.areads = a.sample(pool, min(len(pool), a.randint(0, 2)))
+        for c in self.ctrls:
+            # An array parameter of a verb: the supervisor (or the scenario,
+            # for the root) passes a whole array with the command.
+            if c.instance_of or not c.verbs or a.random() < 0.6:
+                continue
+            i = a.randrange(len(c.verbs))
+            verb, params = c.verbs[i]
+            c.verbs[i] = (verb, params + [(n.fresh("pa"), self.array_type())])
 
     def controller_type(self) -> None:
         """One leaf controller becomes a controller type with two or three instances,
         under the same supervisor, each with its own parameter values and outputs."""
         ct = self.ct_rng
         n = self.names
-        cands = [c for c in self.ctrls[1:] if not c.subs and not c.simulator]
+        cands = [c for c in self.ctrls[1:] if not c.subs]  # a leaf controller or a simulator
         if not cands or ct.random() < 0.25 or not self.features:
             return
         c = ct.choice(cands)
-        parent = next(p for p in self.ctrls if c in p.subs)
+        parent = next((p for p in self.ctrls if c in p.subs), None)  # none for a simulator
         c.type_name = n.fresh("Ty")
         c.tparams = [(n.fresh("k"), ct.choice(["f64", "f64", "i32", "i64", "u32", "bool", "duration"]))
                      for _ in range(ct.randint(0, 3))]
@@ -756,9 +800,10 @@ class DesignGen:
                 args = ", ".join(f"{p} = {v}" for p, v in zip(params, values))
             c.instances.append((name, args))
             if name != c.name:
-                clone = Ctrl(name, c.level, verbs=c.verbs, reports=c.reports, status=c.status, locals=c.locals,
-                             writes=c.writes, instance_of=c)
-                parent.subs.append(clone)
+                clone = Ctrl(name, c.level, simulator=c.simulator, verbs=c.verbs, reports=c.reports, status=c.status,
+                             locals=c.locals, writes=c.writes, instance_of=c)
+                if parent is not None:
+                    parent.subs.append(clone)
                 self.ctrls.append(clone)
         c.own_outs = [g for g in self.gm_out[len(self.gm_out) - len(c.writes) * len(names):]]
 
@@ -943,7 +988,7 @@ class DesignGen:
             if r.random() < 0.5:
                 verb, params = r.choice(s.verbs)
                 self.budget = 8
-                args = [self.expr(t, scope, 2) for _, t in params]
+                args = [self.aval(t, scope) if t in self.arrays else self.expr(t, scope, 2) for _, t in params]
                 if params and r.random() < 0.5:
                     args = [f"{p} = {a}" for (p, _), a in zip(params, args)]
                 out.append(f"{s.name}.{verb}({', '.join(args)})")
@@ -955,7 +1000,9 @@ class DesignGen:
     def plan(self, c: Ctrl, verb: str, params: list[tuple[str, str]], scope: list[Var], targets: list[Var]) -> list[str]:
         r = self.rng
         n = self.names
-        scope = scope + [Var(f"cmd.{p}", t) for p, t in params]
+        scope = scope + [Var(f"cmd.{p}", t) for p, t in params if t not in self.arrays]
+        saved_actx = self.actx
+        self.actx = (self.actx or []) + [(f"cmd.{p}", t) for p, t in params if t in self.arrays]
         states = [n.fresh("S", upper=True) for _ in range(r.randint(0, 3))]
         continuous = bool(states) and r.random() < 0.2
         mods = (" continuous" if continuous else "") + (" ordered" if r.random() < 0.5 else "")
@@ -995,6 +1042,7 @@ class DesignGen:
                 rule("otherwise", st, r.choice(targets_ + [end()]))
             else:
                 rule(f"in_state >= {r.choice([20, 30, 50, 100])} ms", st, end())
+        self.actx = saved_actx
         return [f"    plan {verb}{mods} {{", *rules, "    }"]
 
     # ---- the design -----------------------------------------------------------------
@@ -1027,6 +1075,8 @@ class DesignGen:
             out.append(self.function(fname, params, ret, i))
         for fname, at, it, ret, body in self.afns:
             out.append(f"fn {fname}(xs: {at}, i: {it}) -> {ret} =\n    {body}")
+        for fname, at, elem, body in self.arfns:
+            out.append(f"fn {fname}(xs: {at}, k: {elem}) -> {at} =\n    {body}")
         for ename, params, ret in self.externs:
             out.append(f"extern fn {ename}(" + ", ".join(f"{p}: {t}" for p, t in params) + f") -> {ret} budget 1 us")
         for bname in self.user_blocks:
@@ -1074,6 +1124,9 @@ class DesignGen:
             scope = c.reads + targets
             for s in c.subs:  # the supervisor's view of a subordinate's status fields
                 scope = scope + [Var(f"{s.name}.{v.name}", v.type) for v in s.status]
+                # A block's outputs are status fields of its controller, `INSTANCE__OUTPUT`.
+                for inst, _, _, _, outputs in (s.instance_of or s).blocks:
+                    scope += [Var(f"{s.name}.{inst}__{o}", t) for o, t in outputs if self.blk_rng.random() < 0.6]
             scope += [Var(p, t) for p, t in c.tparams]  # a controller type's value parameters
             if self.use_rates:
                 scope += self.ages(c)
@@ -1119,7 +1172,7 @@ class DesignGen:
         events = []
         for _ in range(r.randint(1, 6)):
             verb, params = r.choice(root.verbs)
-            args = [self.literal(t) for _, t in params]
+            args = [self.array_literal(t, self.arr_rng, scenario=True) if t in self.arrays else self.literal(t) for _, t in params]
             if params and r.random() < 0.5:
                 args = [f"{p} = {a}" for (p, _), a in zip(params, args)]
             events.append((r.randint(1, cycles), f"{root.name}.{verb}({', '.join(args)})"))

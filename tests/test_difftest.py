@@ -105,6 +105,12 @@ def test_generator_covers_the_language() -> None:
         "divided rate": r" period \d+ ms \{$", "age of a GM variable": r"\bage\((in|out)\d+\)",
         "age of a subordinate": r"\bage\(C\d+\)|\bC\d+\.age\b", "freeze": r"^at \d+: freeze \w+$",
         "stop a CPU": r"^at \d+: stop CPU\d+$",
+        # arrays as verb parameters and function results, simulator types, a subordinate's block outputs
+        "array verb parameter": r"^    verb V\d+\(.*pa\d+: \[", "array command argument": r"\bC\d+\.V\d+\(.*\[",
+        "scenario array argument": r"^at \d+: C\d+\.V\d+\(.*\[", "array read of a command": r"\bcmd\.pa\d+\b",
+        "function returning an array": r"^fn arfun\d+\(xs: \[.*\) -> \[", "array function call": r"\barfun\d+\(",
+        "simulator type": r"^simulator type ", "simulator instance": r"^simulator \w+: Ty\d+\(",
+        "subordinate block output": r"\bC\d+\.fb\d+__\w+",
     }
     missing = [k for k, pat in wanted.items() if not re.search(pat, text, re.M)]
     assert missing == []
