@@ -52,6 +52,7 @@ CASES = multi_cpu_examples() + [
     (RELAY, MC / "relay_stop.scn"),
     (RELAY, MC / "relay_freeze.scn"),
     (MC / "extern_cpu.rcs", MC / "extern_cpu_run.scn"),
+    (MC / "apart.rcs", MC / "apart_run.scn"),
 ]
 
 SANITIZE = "-O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=all"

@@ -350,8 +350,8 @@ def _stamp_and_crossing_methods(mp: _Main, tg: RustTarget, ctrls: list[m.Control
             body += arm(str(i), Atom(f"self.buf.gm_stamp.{tg.ident(n)} = tick"), 3)
         body += [f"{pad(3)}_ => {{}}", f"{pad(2)}}}", f"{pad(1)}}}"]
         out.append(body)
-    if len(d.cpus) <= 1:
-        return out
+    if len(d.cpus) <= 1 or not d.crossings:
+        return out  # nothing crosses between CPUs: the trait's defaults (no match on an index)
     get = [f"{pad(1)}fn crossing(&self, i: usize) -> (Value, u64) {{", f"{pad(2)}match i {{"]
     put: list[str] = []
     uses_stamp = False
