@@ -191,7 +191,8 @@ def multi_tables(tg: CTarget, cpu: m.Cpu, ctrls: list[m.Controller], buf: str = 
             stamp = f"offsetof({buffers}, {member}.head.stamp)"
         rows.append(f"{{{names.index(x.writer_cpu)}u, UINT64_C({hex(readers)}), offsetof({buffers}, {member}), sizeof {buf}.{member}, {stamp}}}, /* {x.kind} {tg.comment(x.name)} */")
     gm_names = list(d.gm)
-    wire = wire_tables(tg) if tg.options.transport == "dds" else None
+    # No crossing buffer, no encoding table (an empty initializer is not C).
+    wire = wire_tables(tg) if tg.options.transport == "dds" and d.crossings else None
     return {
         "wire": wire,
         "names": ", ".join(c_string(n) for n in names),
