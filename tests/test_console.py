@@ -56,11 +56,21 @@ class Running:
         return self
 
     def __exit__(self, *exc) -> None:
+        # SIGTERM, as an operator or a service manager stops a Main Program:
+        # it finishes the cycle and removes its operator segment.  SIGKILL
+        # only if it does not end (a killed program cannot remove the
+        # segment, which would stay in /dev/shm after the suite).
         if self.proc.poll() is None:
-            self.proc.kill()
+            self.proc.terminate()
+            try:
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
         self.proc.wait(timeout=10)
         for stream in (self.proc.stdout, self.proc.stderr):
             stream.close()
+        if exc[0] is None:
+            assert not (Path("/dev/shm") / f"rcs-submarine-{self.run}.console").exists(), "the operator segment was left behind"
 
 
 def console_pipes(run: str, script: str, *extra: str) -> subprocess.CompletedProcess:
