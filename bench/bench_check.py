@@ -12,8 +12,11 @@ time (user + system), wall time and peak resident memory of:
             design is unchanged, so its stored findings are replayed
             (rcsc.checks.replay);
   edit      a run with that warm cache after one rule of one controller was
-            edited (a re-check while working on the design): a full check
-            whose guard analysis comes from the cache.
+            edited (a re-check while working on the design): the
+            incremental re-check (rcsc.checks.incremental) parses and
+            checks that controller only; `edit-full` is the same run with
+            RCSC_INCREMENTAL=0 (a full check whose solver analyses come
+            from the cache).
 
 CPU time is what the goals are about: wall time on a shared machine says
 more about the neighbours than about rcsc.  Then it prints, per size, the
@@ -21,8 +24,8 @@ in-process CPU time of each stage of one cold run (`rcsc.driver` step by
 step: reading and parsing, names and types, each check family; the guard
 analysis without cache), and the CPU time of the language server's
 re-check after the same one-rule edit (in process, `driver.check_path` with
-the overlay and the server's in-memory guard store filled by a first
-check).  --profile prints the top cProfile hotspots of one
+the overlay and the server's memory of the last check and of the solver's
+analyses, filled by a first check: the incremental re-check).  --profile prints the top cProfile hotspots of one
 in-process run of the largest size.
 
 Goals (200 controllers): cold <= 3 s CPU and <= 400 MiB, t(200)/t(100)
@@ -63,10 +66,13 @@ def _command() -> list[str]:
     return [exe] if exe else [sys.executable, "-m", "rcsc"]
 
 
-def run_command(path: Path, *extra: str) -> dict:
+def run_command(path: Path, *extra: str, incremental: bool = True) -> dict:
     """One `rcsc check` in a fresh process: CPU s, wall s, peak RSS MiB, exit code."""
     env = dict(os.environ)
     env.pop("RCSC_NO_CACHE", None)
+    env.pop("RCSC_INCREMENTAL", None)
+    if not incremental:
+        env["RCSC_INCREMENTAL"] = "0"
     t0 = time.perf_counter()
     proc = subprocess.Popen(_command() + ["check", str(path), "--format", "short", *extra], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
     _, status, usage = os.wait4(proc.pid, 0)
@@ -113,15 +119,17 @@ def stages(path: Path) -> dict[str, float]:
 
 
 def server_edit(path: Path) -> float:
-    """CPU seconds of the language server's re-check after one edit (in process, warm guard store)."""
-    from rcsc.checks import cache
+    """CPU seconds of the language server's re-check after one edit (in
+    process, what `rcsc lsp` keeps between checks: the last check and the
+    solver's analyses in memory; the incremental re-check applies)."""
+    from rcsc.checks import cache, incremental
     from rcsc.driver import check_path
 
-    store = cache.MemoryStore()
-    check_path(str(path), guard_store=store)
+    memory = incremental.memory_stores(cache.MemoryStore())
+    check_path(str(path), memory=memory)
     edited = edit_one_rule(path.read_text(encoding="utf-8"))
     t = time.process_time()
-    check_path(str(path), overlay={os.path.realpath(path): edited}, guard_store=store)
+    check_path(str(path), overlay={os.path.realpath(path): edited}, memory=memory)
     return time.process_time() - t
 
 
@@ -158,7 +166,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"python {sys.version.split()[0]} on {os.cpu_count()} CPUs; `{' '.join(Path(c).name for c in _command())} check --format short` in fresh processes")
     print("CPU = user + system seconds of the process (the goals are CPU); wall depends on the machine's load")
     print()
-    header = f"{'controllers':>11} {'rules':>6} {'size':>8} | {'cold: CPU s  wall  MiB':>21} | {'warm: CPU s  wall  MiB':>21} | {'edit: CPU s  wall  MiB':>21} | exit"
+    header = f"{'controllers':>11} {'rules':>6} {'size':>8} | {'cold: CPU s  wall  MiB':>21} | {'warm: CPU s  wall  MiB':>21} | {'edit: CPU s  wall  MiB':>21} | {'edit-full: CPU s wall MiB':>21} | exit"
     print(header)
     print("-" * len(header))
     results: dict[int, dict] = {}
@@ -175,12 +183,20 @@ def main(argv: list[str] | None = None) -> int:
             cold = run_command(path, "--no-cache")
             run_command(path)  # fills the cache
             warm = run_command(path)
+            # The same edit in a copy with the same cache, checked in full.
+            twin = Path(tmp) / f"n{n}-full"
+            shutil.copytree(folder, twin)
+            twin_path = twin / path.name
+            twin_path.write_text(edit_one_rule(text), encoding="utf-8")
+            edit_full = run_command(twin_path, incremental=False)
+            shutil.rmtree(twin)
             path.write_text(edit_one_rule(text), encoding="utf-8")
             edit = run_command(path)
             path.write_text(text, encoding="utf-8")
-            results[n] = {"cold": cold, "warm": warm, "edit": edit}
+            results[n] = {"cold": cold, "warm": warm, "edit": edit, "edit_full": edit_full}
             rules = n * args.plans * args.rules
-            print(f"{n:>11} {rules:>6} {path.stat().st_size / 1024:>6.0f}Ki | {_cell(cold):>21} | {_cell(warm):>21} | {_cell(edit):>21} | {cold['rc']}", flush=True)
+            print(f"{n:>11} {rules:>6} {path.stat().st_size / 1024:>6.0f}Ki | {_cell(cold):>21} | {_cell(warm):>21} | {_cell(edit):>21} | "
+                  f"{_cell(edit_full):>21} | {cold['rc']}", flush=True)
 
         if not args.no_stages:
             print("\nstages of one in-process cold run (CPU s):")

@@ -139,6 +139,14 @@ def _check(path: str, as_module: bool = False, cache: bool = True, replay: bool 
         hit = replays.lookup(path, as_module, folder_for(path))
         if hit is not None:
             return hit
+        # Only plans of some controllers changed: check those again (rcsc.checks.incremental).
+        from rcsc.checks import incremental
+
+        quick = incremental.recheck(path, as_module, folder_for(path))
+        if quick is not None:
+            replays.remember(path, as_module, folder_for(path), quick)
+            incremental.remember(path, as_module, folder_for(path), quick)
+            return quick
     driver = _load_driver()
     # `rcsc check` (replay) needs the findings only: the plans' syntax trees
     # are freed as soon as they are converted.
@@ -154,6 +162,7 @@ def _check(path: str, as_module: bool = False, cache: bool = True, replay: bool 
         raise UsageError(str(exc)) from exc
     if cache and replay:
         replays.remember(path, as_module, folder_for(path), result)
+        incremental.remember(path, as_module, folder_for(path), result)
     return result
 
 

@@ -26,6 +26,9 @@ class CheckResult:
     diags: Diagnostics
     model: Design | None
     files: list[LoadedFile]
+    # An incremental re-check (rcsc.checks.incremental): the plans of the
+    # unchanged controllers are elided in the model and blank in the trees.
+    partial: bool = False
 
     @property
     def ok(self) -> bool:
@@ -34,7 +37,7 @@ class CheckResult:
 
 def check_path(
     path: str, as_module: bool = False, overlay: dict[str, str] | None = None, cache_dir: str | None = None, keep_plans: bool = True,
-    guard_store: cache.MemoryStore | None = None,
+    guard_store: cache.MemoryStore | None = None, memory: dict | None = None,
 ) -> CheckResult:
     """Load, analyse and check the design whose root file is `path` (or, with
     `as_module`, the module `path` on its own); `overlay` gives texts that
@@ -42,7 +45,11 @@ def check_path(
     (see `rcsc.checks.cache`), results of the guard and value analyses are
     read from and written to that folder; `guard_store` (a
     `cache.MemoryStore` that a long-lived process keeps between checks) is
-    used instead when given.  Without `keep_plans`, the syntax trees of the
+    used instead when given.  `memory` (`incremental.memory_stores`, kept by
+    a long-lived process: the language server) holds the last check of each
+    design and the solver's analyses: after an edit inside plans only the
+    edited controllers are checked again (`rcsc.checks.incremental`).
+    Without `keep_plans`, the syntax trees of the
     result lack the controllers' plans (freed early to save memory; for
     callers that need only the findings and the model, like `rcsc check`).
     """
@@ -58,7 +65,16 @@ def check_path(
     gc.disable()
     gc.unfreeze()
     try:
-        return _check_path(path, as_module, overlay, cache_dir, keep_plans, guard_store)
+        if memory is None:
+            return _check_path(path, as_module, overlay, cache_dir, keep_plans, guard_store)
+        from rcsc.checks import incremental, replay
+
+        result = incremental.recheck(path, as_module, None, stores=memory, overlay=overlay)
+        if result is None:
+            result = _check_path(path, as_module, overlay, None, keep_plans, memory["guards"])
+        replay.remember(path, as_module, None, result, into=memory[replay.NAMESPACE])
+        incremental.remember(path, as_module, None, result, stores=memory)
+        return result
     finally:
         gc.freeze()
         if was_enabled:

@@ -261,3 +261,32 @@ def test_utf16_columns(client: Client, tmp_path: Path) -> None:
     nope = [d for d in diags if d["code"] == "E0100"]
     # 8 code points before `const`, 9 UTF-16 units; `nope` 15 further.
     assert [d["range"]["start"]["character"] for d in nope] == [24]
+
+
+def test_an_edit_inside_a_plan_is_rechecked_in_part(client: Client, tmp_path: Path, capsys) -> None:
+    """After an edit inside one controller's plan the server re-checks that
+    controller only (rcsc.checks.incremental); the findings are still what
+    `rcsc check` reports, and lookups inside the other controllers' plans
+    (which that re-check did not parse) still work."""
+    sys.path.insert(0, str(ROOT / "bench"))
+    import synthetic
+
+    text = synthetic.generate(5, 3, 6)
+    path = tmp_path / "d.rcs"
+    path.write_text(text)
+    uri = _open(client, path, text)
+    client.diagnostics(uri)
+    at = text.index("<= 1000.0", text.index("controller C1 "))
+    edited = text[:at] + "<= 999.0" + text[at + len("<= 1000.0"):]
+    client.notify("textDocument/didChange", {"textDocument": {"uri": uri, "version": 2}, "contentChanges": [{"text": edited}]})
+    diags = client.diagnostics(uri)
+    path.write_text(edited)
+    got = {(d["code"], d["range"]["start"]["line"] + 1, d["range"]["start"]["character"] + 1) for d in diags}
+    assert got == _cli_findings(path, capsys) and any(code == "E0516" for code, _, _ in got)
+    # A local used in a rule of C3, whose plans the re-check left unparsed.
+    rule = edited.index("count += 1", edited.index("controller C3 "))
+    line = edited.count("\n", 0, rule)
+    position = {"line": line, "character": rule - (edited.rfind("\n", 0, rule) + 1) + 2}
+    hover = client.request("textDocument/hover", {"textDocument": {"uri": uri}, "position": position})
+    assert hover is not None and "count" in hover["contents"]["value"]
+    assert client.close() == 0

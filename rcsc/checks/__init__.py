@@ -32,12 +32,18 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def check_model(design: "Design", diags: "Diagnostics", guard_options: "guards.Options | None" = None, value_store=None) -> None:
+def check_model(design: "Design", diags: "Diagnostics", guard_options: "guards.Options | None" = None, value_store=None,
+                before_solver=None) -> None:
     """Run every check family; findings go to `diags`.  `value_store` (a
-    `rcsc.checks.cache` store) keeps the value analysis between runs."""
+    `rcsc.checks.cache` store) keeps the value analysis between runs.
+    `before_solver()`, if given, is called after the structural families,
+    before the first that asks z3 (`rcsc.checks.incremental` decides there
+    whether to go on)."""
     from rcsc.checks import guards, values
 
     for family in _families():
+        if family is guards and before_solver is not None:
+            before_solver()
         if family is guards:
             guards.check(design, diags, guard_options)
         elif family is values:

@@ -39,7 +39,7 @@ WAIT_ATTRS = ("done", "status", "executing")
 def check(design: Design, diags: Diagnostics) -> None:
     if front_end_errors(diags):
         return  # a command dropped for a bad verb or argument would only give follow-on findings
-    for c in design.controllers.values():
+    for c in m.checked_controllers(design):
         for plan in c.plans.values():
             _check_plan(c, plan, diags)
 

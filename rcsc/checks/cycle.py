@@ -28,7 +28,7 @@ _PERIOD_NAME = re.compile(r"^(DT|TS|PERIOD|CYCLE|CYCLE_TIME|SAMPLE_TIME|TICK)$|_
 
 
 def check(design: Design, diags: Diagnostics) -> None:
-    for c in design.controllers.values():
+    for c in m.checked_controllers(design):
         cpu = design.cpus.get(c.cpu) if c.cpu else None
         exprs = list(_controller_exprs(c))  # walked once for both questions
         if cpu is not None and cpu.heartbeat_ns > 0:

@@ -18,7 +18,7 @@ from rcsc.semantics.types import FloatType
 
 
 def check(design: Design, diags: Diagnostics) -> None:
-    for c in design.controllers.values():
+    for c in m.checked_controllers(design):
         for plan in c.plans.values():
             for r in plan.rules:
                 if r.guard is None:

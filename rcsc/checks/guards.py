@@ -192,7 +192,7 @@ def check(design: Design, diags: Diagnostics, options: Options | None = None, st
     t0 = time.perf_counter()
     cache: dict = {}
     nan = nan_params(design)
-    for c in design.controllers.values():
+    for c in m.checked_controllers(design):
         assigned = _assigned_in_pre_post(c)
         for plan in c.plans.values():
             st.plans += 1
@@ -209,24 +209,36 @@ def nan_params(design: Design) -> set[tuple[str, str]]:
     with an argument that can carry a NaN (see `_may_be_nan`).  Computed once
     per design, to a fixed point (a parameter passed on down the hierarchy).
     """
-    sends = []
-    for sup in design.controllers.values():
-        for plan in sup.plans.values():
-            for r in plan.rules:
-                for job in m.walk_stmts(r.jobs):
-                    if isinstance(job, m.Command):
-                        sub = design.controllers.get(job.sub)
-                        if sub is not None and sub.supervisor == sup.name:
-                            sends.append((sup.name, plan.verb, job))
+    sends = [(sup.name, *send) for sup in design.controllers.values() for send in commands_sent(design, sup)]
     out: set[tuple[str, str]] = set()
     changed = True
     while changed:
         changed = False
-        for sup, verb, job in sends:
-            key = (job.sub, job.verb)
-            if key not in out and any(_may_be_nan(a, (sup, verb) in out) for a in job.args):
+        for sup, verb, sub, sub_verb, nan_if_numbers, nan_if_nan in sends:
+            key = (sub, sub_verb)
+            if key not in out and (nan_if_nan if (sup, verb) in out else nan_if_numbers):
                 out.add(key)
                 changed = True
+    return out
+
+
+def commands_sent(design: Design, sup: m.Controller) -> list[tuple[str, str, str, bool, bool]]:
+    """The commands `sup`'s plans send its own subordinates, as the NaN
+    analysis sees them: (plan verb, subordinate, verb, can an argument be NaN
+    when `sup`'s parameters are numbers, ... when they can be NaN).  Part of
+    what other controllers' checks read of `sup`'s plans, so an incremental
+    re-check keeps it for the controllers it does not parse again."""
+    if m.is_elided(sup):
+        return [tuple(x) for x in sup.plans.summary["sends"]]  # type: ignore[attr-defined]
+    out = []
+    for plan in sup.plans.values():
+        for r in plan.rules:
+            for job in m.walk_stmts(r.jobs):
+                if isinstance(job, m.Command):
+                    sub = design.controllers.get(job.sub)
+                    if sub is not None and sub.supervisor == sup.name:
+                        out.append((plan.verb, job.sub, job.verb, any(_may_be_nan(a, False) for a in job.args),
+                                    any(_may_be_nan(a, True) for a in job.args)))
     return out
 
 

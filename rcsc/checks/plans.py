@@ -69,7 +69,7 @@ def is_always_true(e: m.Expr | None) -> bool:
 
 
 def check(design: Design, diags: Diagnostics) -> None:
-    for c in design.controllers.values():
+    for c in m.checked_controllers(design):
         for plan in c.plans.values():
             _check_plan(design, c, plan, diags)
 
@@ -267,6 +267,10 @@ def failure_of(design: Design, sub: str, verb: str) -> str | None:
         return "it is not declared in this design"
     if c.simulator:
         return f"`{sub}` is a simulator, which a deployment replaces by the plant"
+    if m.is_elided(c):
+        # An incremental re-check keeps this answer for each verb of the
+        # controllers it does not parse again (`rcsc.checks.incremental`).
+        return c.plans.summary["failure"].get(verb, f"`{sub}` has no plan for `{verb}`")  # type: ignore[attr-defined]
     plan = c.plans.get(verb)
     if plan is None:
         return f"`{sub}` has no plan for `{verb}`"

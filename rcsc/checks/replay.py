@@ -44,7 +44,7 @@ def _sha(text: str) -> str:
 
 def key_of(path: str, as_module: bool) -> str:
     """The key of the entry of the design `path`: one entry per root file (each check overwrites it)."""
-    env = sorted((k, v) for k, v in os.environ.items() if k.startswith("RCSC_") and k != "RCSC_NO_CACHE")
+    env = sorted((k, v) for k, v in os.environ.items() if k.startswith("RCSC_") and k not in ("RCSC_NO_CACHE", "RCSC_INCREMENTAL"))
     return cache.digest(("replay", FORMAT, path, os.path.realpath(path), as_module, tuple(env)))
 
 
@@ -103,6 +103,17 @@ def store(store: cache.Store, key: str, files: list[tuple[str, str, object]], di
 # ---- replaying ----------------------------------------------------------------------------
 
 
+def decode(data: list, span) -> Diagnostic:
+    """A stored finding (`_diag`), its spans made by `span(stored span)`."""
+    code, sev, message, sp, label, labels, notes, helps, extra = data
+    d = Diagnostic(code, Severity(sev), message, span(sp), label)
+    d.labels = [Label(span(s), msg) for s, msg in labels]
+    d.notes = list(notes)
+    d.helps = list(helps)
+    d.data = cache.decode(extra, {})
+    return d
+
+
 def replay(store: cache.Store, key: str, root_text: str):
     """(sources [(display path, SourceFile)], diags) of a stored check whose files are all
     unchanged, or None."""
@@ -127,13 +138,7 @@ def replay(store: cache.Store, key: str, root_text: str):
             return None if data is None else Span(files[data[0]], int(data[1]), int(data[2]))
 
         def diag(data) -> Diagnostic:
-            code, sev, message, sp, label, labels, notes, helps, extra = data
-            d = Diagnostic(code, Severity(sev), message, span(sp), label)
-            d.labels = [Label(span(s), msg) for s, msg in labels]
-            d.notes = list(notes)
-            d.helps = list(helps)
-            d.data = cache.decode(extra, {})
-            return d
+            return decode(data, span)
 
         diags = Diagnostics()
         for data in value["items"]:
@@ -193,22 +198,32 @@ def lookup(path: str, as_module: bool, folder: str) -> Replayed | None:
     return Replayed(diags, files)
 
 
-def remember(path: str, as_module: bool, folder: str, result) -> None:
-    """Store the findings of `result` (a `rcsc.driver.CheckResult` of the design `path`)."""
-    loaded = getattr(result, "files", None)
-    if cache.disabled_by_environment() or not loaded or not loaded[0].is_root:
-        return
+def where_of(f) -> str | None:
+    """Where a loaded file (`rcsc.front.loader.LoadedFile`) is read again:
+    its real path, or for a standard-library module that of its resource;
+    None if that is not a plain file."""
     from rcsc.front.loader import stdlib_path
 
+    where = f.real
+    if where.startswith("<stdlib>/"):
+        res = stdlib_path(where[len("<stdlib>/"):])
+        where = str(res) if res is not None else ""
+        if not where or not os.path.isfile(where):
+            return None
+    return where or None
+
+
+def remember(path: str, as_module: bool, folder: str | None, result, into=None) -> None:
+    """Store the findings of `result` (a `rcsc.driver.CheckResult` of the
+    design `path`) in `folder`, or in the store `into` (a language server's
+    `cache.MemoryStore`)."""
+    loaded = getattr(result, "files", None)
+    if (into is None and cache.disabled_by_environment()) or not loaded or not loaded[0].is_root:
+        return
     files = []
     for f in loaded:
-        where = f.real
-        if where.startswith("<stdlib>/"):
-            res = stdlib_path(where[len("<stdlib>/"):])
-            where = str(res) if res is not None else ""
-            if not where or not os.path.isfile(where):
-                return  # not a plain file: cannot be re-read cheaply
-        if not where:
-            return
+        where = where_of(f)
+        if where is None:
+            return  # not a plain file: cannot be re-read cheaply
         files.append((f.source.path, where, f.source))
-    store(cache.Store(folder, NAMESPACE), key_of(path, as_module), files, result.diags)
+    store(into if into is not None else cache.Store(folder, NAMESPACE), key_of(path, as_module), files, result.diags)

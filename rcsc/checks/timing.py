@@ -65,7 +65,7 @@ def check(design: Design, diags: Diagnostics) -> None:
             if any(design.controllers[n].divider > 1 for n in frame.controllers):
                 diag.with_note("every controller steps in cycle 1, whatever its period: a longer period lowers the load, not the heaviest frame")
 
-    for c in design.controllers.values():
+    for c in m.checked_controllers(design):
         period = c.period_ns
         if c.cpu is None or period <= 0:
             continue

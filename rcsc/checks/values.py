@@ -62,11 +62,14 @@ def check(design: Design, diags: Diagnostics, store=None) -> None:
     nan = nan_params(design)
     context = None
     if store is not None:
-        try:
-            context = cache.digest(("values", FORMAT, _structure(_context_of(design))))
-        except cache.NotStorable:
+        # An incremental re-check (rcsc.checks.incremental) brings the last
+        # check's context: it runs only when everything the context is made
+        # of (all but the plans) is unchanged.
+        context = design.values_context or context_key(design)
+        if context is None:
             store = None
-    for c in design.controllers.values():
+        design.values_context = context
+    for c in m.checked_controllers(design):
         cpu = design.cpus.get(c.cpu) if c.cpu else None
         period = cpu.heartbeat_ns if cpu is not None else None
         for plan in c.plans.values():
@@ -119,6 +122,15 @@ def _structure(x):
             raise cache.NotStorable(t.__name__)
         names = _FIELDS[t] = tuple(f.name for f in dataclasses.fields(x))
     return (t.__name__,) + tuple(_structure(getattr(x, n)) for n in names)
+
+
+def context_key(design: Design) -> str | None:
+    """The digest of everything but the plans that a plan's value findings
+    depend on (None if it cannot be stored)."""
+    try:
+        return cache.digest(("values", FORMAT, _structure(_context_of(design))))
+    except cache.NotStorable:
+        return None
 
 
 def _context_of(design: Design) -> tuple:

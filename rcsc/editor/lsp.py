@@ -28,7 +28,7 @@ from pygls.lsp.server import LanguageServer
 
 import rcsc
 from rcsc import codes
-from rcsc.checks import cache
+from rcsc.checks import cache, incremental
 from rcsc.editor import fmt, symbols
 from rcsc.front import workspace
 from rcsc import config as cfg
@@ -109,9 +109,13 @@ class RcsServer(LanguageServer):
         self.pending: dict[str, asyncio.Task] = {}
         self.indexes: dict[str, symbols.Index] = {}  # uri -> index of its design
         self.sources: dict[str, SourceFile] = {}  # uri -> the text the index was built from
+        self.roots: dict[str, tuple[str, bool]] = {}  # uri -> (root file, as a module) of its last check
         # The guard analysis of every plan shape met so far: a re-check asks
         # the solver only about plans whose shape the edit changed.
         self.guard_store = cache.MemoryStore()
+        # The last check of each design, for the incremental re-check after
+        # an edit inside plans (rcsc.checks.incremental).
+        self.stores = incremental.memory_stores(self.guard_store)
 
     # -- checking ------------------------------------------------------------
 
@@ -141,8 +145,9 @@ class RcsServer(LanguageServer):
                 if any(os.path.realpath(f.source.path) == real for f in files if not f.is_root):
                     root, as_module = design, False
                     break
+        self.roots[uri] = (root, as_module)
         try:
-            result = driver.check_path(root, as_module=as_module, overlay=overlay, guard_store=self.guard_store)
+            result = driver.check_path(root, as_module=as_module, overlay=overlay, memory=self.stores)
         except driver.InputError as exc:
             diag = lsp.Diagnostic(range=lsp.Range(start=lsp.Position(line=0, character=0), end=lsp.Position(line=0, character=0)),
                                   message=str(exc), severity=lsp.DiagnosticSeverity.Error, source="rcsc")
@@ -152,7 +157,12 @@ class RcsServer(LanguageServer):
         found = cfg.find(path)
         conf = cfg.load(found[0], found[1], config_diags) if found else cfg.Config()
         reported = conf.apply(result.diags)
-        self.indexes[uri] = symbols.build([f.tree for f in result.files if f.tree is not None])
+        if getattr(result, "partial", False):
+            # The unchanged controllers' plans were not parsed: the index is
+            # made again when a lookup needs it (`index`).
+            self.indexes.pop(uri, None)
+        else:
+            self.indexes[uri] = symbols.build([f.tree for f in result.files if f.tree is not None])
         own = next((f.source for f in result.files if os.path.realpath(f.source.path) == real), None)
         self.sources[uri] = own or SourceFile(path, doc.source)
         out = []
@@ -195,15 +205,34 @@ class RcsServer(LanguageServer):
     # -- lookups ---------------------------------------------------------------
 
     def symbol_at(self, uri: str, pos: lsp.Position) -> tuple[symbols.Symbol | None, SourceFile, int]:
-        if uri not in self.indexes:
+        if uri not in self.sources:
             self.check(uri)
-        source = self.sources[uri]
         doc = self.workspace.get_text_document(uri)
-        if source.text != doc.source.replace("\r\n", "\n"):
+        if self.sources[uri].text != doc.source.replace("\r\n", "\n"):
             self.check(uri)  # the index is older than the text: renew it
-            source = self.sources[uri]
+        idx = self.index(uri)
+        source = self.sources[uri]  # the text the index was made from
         offset = _offset(source, pos)
-        return symbols.lookup(self.indexes[uri], source, offset), source, offset
+        return symbols.lookup(idx, source, offset), source, offset
+
+    def index(self, uri: str) -> symbols.Index:
+        """The symbol index of the design of `uri`; after an incremental
+        re-check (which leaves unchanged plans unparsed), made from a parse
+        of the texts the check saw."""
+        found = self.indexes.get(uri)
+        if found is None:
+            from rcsc import driver
+
+            root, as_module = self.roots[uri]
+            try:
+                files = driver.path_to_files(root, Diagnostics(), as_module, self.overlay())
+            except driver.InputError:
+                files = []
+            found = self.indexes[uri] = symbols.build([f.tree for f in files if f.tree is not None])
+            own = next((f.source for f in files if os.path.realpath(f.source.path) == os.path.realpath(uri_to_path(uri))), None)
+            if own is not None:
+                self.sources[uri] = own
+        return found
 
 
 def make_server() -> RcsServer:
@@ -254,17 +283,18 @@ def make_server() -> RcsServer:
     @server.feature(lsp.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
     def document_symbol(ls: RcsServer, params: lsp.DocumentSymbolParams) -> list[lsp.DocumentSymbol]:
         uri = params.text_document.uri
-        if uri not in ls.indexes:
+        if uri not in ls.sources:
             ls.check(uri)
+        idx = ls.index(uri)
         path = ls.sources[uri].path
-        return [_doc_symbol(s) for s in ls.indexes[uri].top.get(path, [])]
+        return [_doc_symbol(s) for s in idx.top.get(path, [])]
 
     @server.feature(lsp.TEXT_DOCUMENT_COMPLETION)
     def completion(ls: RcsServer, params: lsp.CompletionParams) -> lsp.CompletionList:
         uri = params.text_document.uri
-        if uri not in ls.indexes:
+        if uri not in ls.sources:
             ls.check(uri)
-        idx = ls.indexes[uri]
+        idx = ls.index(uri)
         items = {}
         for name, sym in idx.globals.items():
             items[name] = lsp.CompletionItem(label=name, kind=lsp.CompletionItemKind.Variable, detail=sym.detail)

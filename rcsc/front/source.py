@@ -23,6 +23,18 @@ _LONE_CR = re.compile("\r(?!\n)")
 BIDI_CONTROLS = frozenset("\u061c\u200e\u200f\u202a\u202b\u202c\u202d\u202e\u2066\u2067\u2068\u2069")
 
 
+def normalized(text: str) -> str:
+    """The text as a `SourceFile` holds it.  A byte-order mark is not part of
+    the text (editors do not count it in columns), and a lone CR (classic
+    Mac line ends) ends a line like LF does; replacing it by LF keeps every
+    offset where it was."""
+    if text.startswith("\ufeff"):
+        text = text[1:]
+    if "\r" in text:
+        text = _LONE_CR.sub("\n", text)
+    return text
+
+
 @dataclass(eq=False)
 class SourceFile:
     """One file of a design: its display path and its text."""
@@ -32,13 +44,7 @@ class SourceFile:
     _line_starts: list[int] = field(default_factory=list, repr=False)
 
     def __post_init__(self) -> None:
-        # A byte-order mark is not part of the text (editors do not count it
-        # in columns), and a lone CR (classic Mac line ends) ends a line like
-        # LF does; replacing it by LF keeps every offset where it was.
-        if self.text.startswith("\ufeff"):
-            self.text = self.text[1:]
-        if "\r" in self.text:
-            self.text = _LONE_CR.sub("\n", self.text)
+        self.text = normalized(self.text)
         # Line starts from the line lengths (done in C: a large design has
         # hundreds of thousands of lines).
         self._line_starts = [0, *itertools.accumulate(len(line) + 1 for line in self.text.split("\n")[:-1])]

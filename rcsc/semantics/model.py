@@ -317,6 +317,47 @@ class NameUse:
     span: Span
 
 
+class PlansElided(Exception):
+    """A check read the plans of a controller whose plans a re-check left out
+    (`ElidedPlans`): the re-check cannot answer for it and checks in full."""
+
+
+class ElidedPlans:
+    """The plans of a controller that an incremental re-check did not parse
+    again (`rcsc.checks.incremental`): its findings come from the previous
+    check, and what other controllers' checks need of its plans from
+    `summary` (see `rcsc.checks.incremental.controller_summary`).  Any use
+    of the plans themselves raises `PlansElided`, so a check that would
+    need them is never answered from a stale or empty table.  (Not a dict
+    subclass: C code reads a dict's storage directly, past any override.)"""
+
+    __slots__ = ("summary",)
+
+    def __init__(self, summary: dict) -> None:
+        self.summary = summary
+
+    def _refuse(self, *args, **kwargs):
+        raise PlansElided()
+
+    __getitem__ = __contains__ = __iter__ = __len__ = __bool__ = __eq__ = _refuse  # type: ignore[assignment]
+    get = keys = values = items = _refuse
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return "ElidedPlans(...)"
+
+
+def is_elided(c: "Controller") -> bool:
+    return type(c.plans) is ElidedPlans
+
+
+def checked_controllers(design: "Design") -> list["Controller"]:
+    """The controllers whose own plans a check family examines: all of them,
+    except in an incremental re-check those whose plans were left out (their
+    findings are the previous check's)."""
+    return [c for c in design.controllers.values() if type(c.plans) is not ElidedPlans]
+
+
 @dataclass
 class Controller:
     name: str
@@ -392,6 +433,10 @@ class Design:
     # Filled in by the timing check: GM variables in declaration order, then
     # command and status buffers in controller declaration order.
     crossings: list[Crossing] = field(default_factory=list)
+    # Filled in by the value analysis when it keeps results between runs
+    # (`rcsc.checks.values.context_key`), or brought by an incremental
+    # re-check from the last check.
+    values_context: str | None = None
 
     @property
     def base_tick_ns(self) -> int:

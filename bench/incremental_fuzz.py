@@ -1,0 +1,243 @@
+#!/usr/bin/env python3
+"""Random edits inside plans: the incremental re-check must equal a full check.
+
+    python bench/incremental_fuzz.py --seeds 0..49          # designs of the differential tester, edited
+    python bench/incremental_fuzz.py --seeds 0..9 --keep /tmp/incr-fails
+
+For each seed it takes a design (the differential tester's draw for the seed,
+unchecked, so it may hold findings; or an example or a synthetic design),
+runs `rcsc check` on it (which stores its findings and outline in
+`.rcsc-cache/`), copies the folder, makes the same random edits inside the
+plans of one or two controllers in both copies, and then runs `rcsc check`
+in the first copy (the incremental re-check when it applies) and, in the
+second, `rcsc check` with `RCSC_INCREMENTAL=0` (a full check with the same
+solver cache).  The two JSON reports must be equal byte for byte, and so
+must the SARIF reports (which list suppressed findings).  Each check is a
+process of its own: z3's answers, so the witnesses, depend on what the
+process asked before.
+
+It prints how many edits took the incremental path (the others are
+checked in full: an edit that changes what other controllers see, a design
+with controller types, ...) and every disagreement, with the edit.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import random
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(ROOT))
+
+from rcsc.front import items as it  # noqa: E402
+
+_NUMBER = re.compile(r"(?<![A-Za-z_0-9.])[0-9]+(?:\.[0-9]+)?(?![A-Za-z_0-9.])")
+_CMP = {"<=": "<", "<": "<=", ">=": ">", ">": ">=", "==": "!=", "!=": "=="}
+_CMP_RE = re.compile(r"<=|>=|==|!=|(?<![-<>=!])[<>](?![=])")
+_RULE = re.compile(r"^[ \t]*[A-Za-z_][A-Za-z0-9_]*:[^\n]*;[^\n]*$", re.M)
+
+
+def design_for(seed: int) -> str:
+    """A design for `seed`: mostly the differential tester's draws, sometimes an example or a synthetic design."""
+    import difftest_gen
+    import synthetic
+
+    kind = seed % 10
+    if kind == 7:
+        examples = sorted(ROOT.glob("examples/*/*.rcs"))
+        return examples[(seed // 10) % len(examples)].read_text(encoding="utf-8")
+    if kind == 8:
+        return synthetic.generate(4 + seed % 5, 3, 6)
+    return difftest_gen.draw(seed, 0, features=kind != 9).design
+
+
+def edit(text: str, rng: random.Random) -> tuple[str, list[str]] | None:
+    """The text with 1 to 3 random edits inside the plan bodies of one or two controllers, and what was done."""
+    found = it.controller_items(text)
+    if not found:
+        return None
+    with_bodies = [x for x in found if x.bodies]
+    if not with_bodies:
+        return None
+    targets = rng.sample(with_bodies, min(len(with_bodies), rng.choice((1, 1, 2))))
+    bodies = [(x.name, b) for x in targets for b in x.bodies]
+    done: list[str] = []
+    # Edit from the end of the text so earlier offsets stay valid.
+    picks = sorted(rng.sample(bodies, min(len(bodies), rng.randint(1, 3))), key=lambda p: -p[1][1])
+    for cname, (verb, s, e) in picks:
+        body = text[s:e]
+        new_body, what = _mutate(body, rng)
+        if new_body is None:
+            continue
+        text = text[:s] + new_body + text[e:]
+        done.append(f"{cname}.{verb}: {what}")
+    return (text, done) if done else None
+
+
+def _mutate(body: str, rng: random.Random) -> tuple[str | None, str]:
+    kind = rng.choice(("number", "number", "compare", "delete", "duplicate", "comment", "lines", "error", "allow", "type"))
+    rules = list(_RULE.finditer(body))
+    if kind == "number":
+        nums = list(_NUMBER.finditer(body))
+        if not nums:
+            return None, ""
+        m = rng.choice(nums)
+        old = m.group()
+        new = str(int(float(old)) + rng.choice((-1, 1, 7))) + (".5" if "." in old else "")
+        return body[:m.start()] + new + body[m.end():], f"{old} -> {new}"
+    if kind == "compare":
+        ops = list(_CMP_RE.finditer(body))
+        if not ops:
+            return None, ""
+        m = rng.choice(ops)
+        return body[:m.start()] + _CMP[m.group()] + body[m.end():], f"{m.group()} -> {_CMP[m.group()]}"
+    if not rules:
+        return None, ""
+    r = rng.choice(rules)
+    if kind == "delete":
+        return body[:r.start()] + body[r.end():], f"delete `{r.group().strip()[:40]}`"
+    if kind == "duplicate":
+        line = r.group()
+        label = re.match(r"[ \t]*([A-Za-z_][A-Za-z0-9_]*):", line).group(1)  # type: ignore[union-attr]
+        copy = line.replace(label + ":", label + "_dup:", 1)
+        return body[:r.end()] + "\n" + copy + body[r.end():], f"duplicate {label}"
+    if kind == "comment":
+        return body[:r.start()] + "    // a comment\n    /* and { another } */\n" + body[r.start():], "comments"
+    if kind == "lines":
+        return body[:r.end()] + "\n\n\n" + body[r.end():], "blank lines"
+    if kind == "error":
+        line = r.group()
+        new = re.sub(r"->\s*[^|;]+?\s*(\||;)", r"-> error(7) \1", line, count=1)
+        return body[:r.start()] + new + body[r.end():], "next state -> error(7)"
+    if kind == "allow":
+        return body[:r.start()] + "    // rcsc: allow(W0515) the order is meant\n" + body[r.start():], "allow W0515"
+    # A type error in a condition.
+    line = r.group()
+    new = line.replace(":", ": 1 + true and", 1)
+    return body[:r.start()] + new + body[r.end():], "type error"
+
+
+_WITNESS_NUMBER = re.compile(r"may be -?[0-9][0-9.e+-]*")
+
+
+def normalized(report: str):
+    """A JSON report without what depends on the solver's history: witness
+    values (z3 answers a question with a model that depends on the terms the
+    process made before, so a re-check that asks fewer questions can get
+    another witness for the same finding), and findings of a solver
+    question that ran out of wall-clock time (the machine's load decides)."""
+    try:
+        doc = json.loads(report)
+    except ValueError:
+        return report
+    out = []
+    for d in doc["diagnostics"]:
+        if d["code"] == "W0518" and any("canceled" in n or "timeout" in n for n in d["notes"]):
+            continue
+        d = dict(d)
+        d["data"] = {k: v for k, v in d.get("data", {}).items() if k not in ("witness", "sample", "externs", "path")}
+        d["notes"] = [n for n in d["notes"] if "witness" not in n]
+        d["message"] = _WITNESS_NUMBER.sub("may be _", d["message"])
+        out.append(d)
+    return out
+
+
+def normalized_sarif(report: str):
+    try:
+        doc = json.loads(report)
+    except ValueError:
+        return report
+    results = doc["runs"][0]["results"]
+    return sorted((r["ruleId"], json.dumps(r["locations"], sort_keys=True), "suppressions" in r) for r in results)
+
+
+def _check(folder: Path, name: str, *extra: str, env: dict | None = None) -> str:
+    out = subprocess.run([sys.executable, "-m", "rcsc", "check", name, *extra], cwd=folder, capture_output=True, text=True,
+                         env=env, timeout=600)
+    if out.returncode not in (0, 1) or "Traceback" in out.stderr:
+        return f"exit {out.returncode}\n{out.stderr}"
+    return out.stdout
+
+
+def run_seed(seed: int, work: Path) -> dict:
+    rng = random.Random(seed)
+    text = design_for(seed)
+    edited = edit(text, rng)
+    if edited is None:
+        return {"seed": seed, "skipped": True}
+    new_text, what = edited
+    a, b = work / f"s{seed}a", work / f"s{seed}b"
+    a.mkdir()
+    (a / "d.rcs").write_text(text, encoding="utf-8")
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env.pop("RCSC_NO_CACHE", None)
+    _check(a, "d.rcs", "--format", "short", env=env)
+    shutil.copytree(a, b)
+    (a / "d.rcs").write_text(new_text, encoding="utf-8")
+    (b / "d.rcs").write_text(new_text, encoding="utf-8")
+    # The probe asks the re-check whether it applies.  It runs in both
+    # copies, so that both solver caches then hold the same answers for the
+    # edited plans (a partial run that finds it does not apply has asked the
+    # solver already; its answers stay in the cache, as they would for a
+    # user).  A witness depends on what the process asked z3 before, so the
+    # comparison needs the same cached answers on both sides.
+    probe_code = ("from rcsc.checks import incremental; r = incremental.recheck('d.rcs', False, '.rcsc-cache'); "
+                  "print(r is not None, incremental.last_miss)")
+    probe = subprocess.run([sys.executable, "-c", probe_code], cwd=a, capture_output=True, text=True, env=env, timeout=600)
+    subprocess.run([sys.executable, "-c", probe_code], cwd=b, capture_output=True, text=True, env=env, timeout=600)
+    used = probe.stdout.startswith("True")
+    miss = probe.stdout.strip().split(" ", 1)[-1] if not used else ""
+    inc = _check(a, "d.rcs", "--format", "json", env=env)
+    full_env = dict(env, RCSC_INCREMENTAL="0")
+    full = _check(b, "d.rcs", "--format", "json", env=full_env)
+    exact = inc == full
+    ok = exact or normalized(inc) == normalized(full)
+    if ok:
+        sa, sb = _check(a, "d.rcs", "--format", "sarif", env=env), _check(b, "d.rcs", "--format", "sarif", env=full_env)
+        ok = sa == sb or normalized_sarif(sa) == normalized_sarif(sb)
+    return {"seed": seed, "used": used, "miss": miss, "ok": ok, "exact": exact, "edits": what, "inc": inc, "full": full}
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seeds", default="0..19", help="A..B (inclusive)")
+    ap.add_argument("--keep", help="copy the folders of disagreeing seeds here")
+    ap.add_argument("-v", "--verbose", action="store_true", help="one line per seed: the path taken and the edits")
+    args = ap.parse_args(argv)
+    lo, hi = (int(x) for x in args.seeds.split(".."))
+    used = bad = skipped = exact = 0
+    with tempfile.TemporaryDirectory(prefix="incr-fuzz-") as tmp:
+        for seed in range(lo, hi + 1):
+            r = run_seed(seed, Path(tmp))
+            if r.get("skipped"):
+                skipped += 1
+                continue
+            used += r["used"]
+            exact += r["exact"]
+            if args.verbose:
+                print(f"seed {seed}: {'incremental' if r['used'] else 'full (' + r['miss'] + ')'}; {'; '.join(r['edits'])}")
+            if not r["ok"]:
+                bad += 1
+                print(f"seed {seed}: DISAGREE after {r['edits']}")
+                if args.keep:
+                    for suffix in "ab":
+                        shutil.copytree(Path(tmp) / f"s{seed}{suffix}", Path(args.keep) / f"s{seed}{suffix}", dirs_exist_ok=True)
+                    Path(args.keep, f"s{seed}.json").write_text(json.dumps(r, indent=1), encoding="utf-8")
+    n = hi - lo + 1 - skipped
+    print(f"{n} edited designs, {used} re-checked incrementally, {bad} disagreements ({skipped} skipped; "
+          f"{exact} reports equal byte for byte, the others after leaving out witnesses)")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,363 @@
+"""Re-check after an edit inside plans: only the edited controllers are parsed and checked again.
+
+`rcsc check` keeps the findings of the last check of each design in
+`.rcsc-cache/` (`rcsc.checks.replay`).  When the root file has changed
+since, but only inside the plans of some controllers (the common edit: a
+rule, a condition, a job), this module answers without parsing or checking
+the other controllers again:
+
+1. The root text is cut into its controllers and their plan bodies without
+   parsing (`rcsc.front.items`).  Everything outside the plan bodies -- the
+   declarations, the CPUs, each controller's outline (header, verbs, status,
+   locals, `pre`, `post`) -- must be unchanged, and so must every imported
+   file; otherwise the design is checked in full.
+2. The design is parsed and modelled from a copy of the text in which the
+   plan bodies of the unchanged controllers are blanks (every offset, line
+   and column stays where it was), so their plans cost nothing.  The
+   parser must find exactly the plans the scan found.
+3. Those controllers' plans in the model are `ElidedPlans`: the check
+   families skip them (`model.checked_controllers`), and what other
+   controllers' checks read of them -- whether a verb can end in ERROR
+   (`plans.failure_of`) and the commands they send with arguments that
+   can be NaN (`guards.commands_sent`) -- is their summary from the last
+   check (`controller_summary`).  Any other read of an elided plan raises
+   `PlansElided` and the design is checked in full: a check that needs more
+   than the summary is never answered from a stale table.
+4. The edited controllers' summaries must equal their last ones (else what
+   other controllers were checked against has changed: full check).
+5. The findings are the last check's findings inside the unchanged
+   controllers (moved by the length change of the edits before them) and
+   this run's findings everywhere else; suppressions (`rcsc: allow`) are
+   applied to the whole again.
+
+The answer is the one a full check with the same cache gives, finding for
+finding (tests/test_incremental.py edits designs at random and compares).
+Only `rcsc check` uses it: the result carries findings, not a model.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+from rcsc.checks import cache
+from rcsc.checks import replay as replays
+from rcsc.diagnostics import Diagnostic, Diagnostics
+from rcsc.front import items as it
+from rcsc.front.source import SourceFile, Span, normalized
+from rcsc.outputs import safeio
+
+NAMESPACE = "outline"
+FORMAT = 1
+# The findings that `rcsc.checks.suppress` makes: computed again over the whole text.
+_SUPPRESSION_CODES = frozenset(("W0008",))
+
+
+def controller_summary(design, c) -> dict:
+    """What the checks of other controllers read of `c`'s plans (JSON values)."""
+    from rcsc.checks.guards import commands_sent
+    from rcsc.checks.plans import failure_of
+    from rcsc.semantics import model as m
+
+    if m.is_elided(c):
+        return c.plans.summary
+    return _plain({
+        "sends": [list(x) for x in commands_sent(design, c)],
+        "failure": {verb: failure_of(design, c.name, verb) for verb in c.plans},
+    })
+
+
+def _plain(value):
+    """`value` as JSON gives it back (lists for tuples), so that summaries compare equal."""
+    return json.loads(json.dumps(value))
+
+
+# ---- remembering the outline of a full check ----------------------------------------------
+
+
+def stores_in(folder: str) -> dict:
+    """The stores of the cache folder `folder`, by namespace."""
+    return {ns: cache.Store(folder, ns) for ns in (NAMESPACE, replays.NAMESPACE, "guards", "values")}
+
+
+def memory_stores(solver_store: cache.MemoryStore) -> dict:
+    """Stores in memory, for a long-lived process (the language server); the
+    solver's analyses in `solver_store`, which the process keeps anyway."""
+    return {NAMESPACE: cache.MemoryStore(limit=64), replays.NAMESPACE: cache.MemoryStore(limit=64), "guards": solver_store,
+            "values": solver_store}
+
+
+def remember(path: str, as_module: bool, folder: str | None, result, stores: dict | None = None) -> None:
+    """Store the outline of the root file of a check (`result`, a
+    `rcsc.driver.CheckResult`) next to its findings (`replay.remember`), in
+    `folder` or in `stores` (`memory_stores`)."""
+    design = getattr(result, "model", None)
+    loaded = getattr(result, "files", None)
+    if (stores is None and cache.disabled_by_environment()) or design is None or not loaded or not loaded[0].is_root:
+        return
+    text = loaded[0].source.text
+    found = it.controller_items(text)
+    if found is None or any(f.tree is None for f in loaded):
+        return
+    try:
+        summaries = {item.name: controller_summary(design, design.controllers[item.name]) for item in found}
+    except KeyError:
+        return  # a controller the scan found and the model does not hold
+    value = {
+        "format": FORMAT,
+        "root": replays._sha(text),
+        "rest": it.digest(it.rest_of(text, found)),
+        "controllers": [[x.name, x.start, x.end, it.digest(x.outline(text)), it.digest(x.body_text(text))] for x in found],
+        "summaries": summaries,
+        "values_context": design.values_context,
+    }
+    target = stores[NAMESPACE] if stores is not None else cache.Store(folder, NAMESPACE)  # type: ignore[arg-type]
+    try:
+        target.put(replays.key_of(path, as_module), value)
+    except (ValueError, TypeError):
+        return
+
+
+# ---- the re-check -------------------------------------------------------------------------
+
+
+class _Miss(Exception):
+    """The incremental re-check does not apply: check in full (the argument says why)."""
+
+
+# Why the last `recheck` did not apply (for tests and bench/incremental_fuzz.py).
+last_miss = ""
+
+
+def recheck(path: str, as_module: bool, folder: str | None, stores: dict | None = None, overlay: dict[str, str] | None = None):
+    """The findings of `path` after an edit inside the plans of some of its
+    controllers (a `rcsc.driver.CheckResult` whose model has the unchanged
+    controllers' plans elided), or None when the design must be checked in
+    full (`last_miss` says why)."""
+    if os.environ.get("RCSC_INCREMENTAL") == "0" or (stores is None and cache.disabled_by_environment()):
+        return None
+    import gc
+
+    # As in `rcsc.driver.check_path`: no cyclic collection during the run.
+    was_enabled = gc.isenabled()
+    gc.disable()
+    global last_miss
+    last_miss = ""
+    try:
+        return _recheck(path, as_module, stores if stores is not None else stores_in(folder), overlay or {})  # type: ignore[arg-type]
+    except _Miss as miss:
+        last_miss = str(miss.args[0]) if miss.args else "?"
+        return None
+    finally:
+        gc.freeze()
+        if was_enabled:
+            gc.enable()
+
+
+def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
+    key = replays.key_of(path, as_module)
+    outline = stores[NAMESPACE].get(key)
+    last = stores[replays.NAMESPACE].get(key)
+    if not isinstance(outline, dict) or not isinstance(last, dict) or outline.get("format") != FORMAT:
+        raise _Miss("no stored outline")
+
+    def read(where: str) -> str | None:
+        text = overlay.get(where)
+        return text if text is not None else replays._read_text(where)
+
+    try:
+        files = last["files"]
+        if files[0][2] != outline["root"]:
+            raise _Miss("findings and outline of different checks")
+        for _, where, sha in files[1:]:
+            text = read(where)
+            if text is None or replays._sha(normalized(text)) != sha:
+                raise _Miss("an imported file changed")
+        old_items = [(str(n), int(s), int(e), str(o), str(b)) for n, s, e, o, b in outline["controllers"]]
+        summaries = outline["summaries"]
+        values_context = outline.get("values_context")
+        if values_context is not None and not isinstance(values_context, str):
+            raise ValueError
+    except (KeyError, TypeError, ValueError, IndexError):
+        raise _Miss("a corrupt entry") from None
+    raw = overlay.get(os.path.realpath(path))
+    if raw is None:
+        try:
+            raw = safeio.read_input(path).decode("utf-8")
+        except (OSError, ValueError, safeio.InputError):
+            raise _Miss("the root file cannot be read") from None
+    text = normalized(raw)
+    if replays._sha(text) == outline["root"]:
+        raise _Miss("the root file is unchanged")
+    new_items = it.controller_items(text)
+    if new_items is None or it.digest(it.rest_of(text, new_items)) != outline["rest"]:
+        raise _Miss("the text outside the controllers changed")
+    if [x.name for x in new_items] != [n for n, *_ in old_items]:
+        raise _Miss("controllers added, removed or renamed")
+    changed: set[str] = set()
+    for x, (name, _, _, osha, bsha) in zip(new_items, old_items):
+        if it.digest(x.outline(text)) != osha:
+            raise _Miss("a controller outside its plans changed")
+        if it.digest(x.body_text(text)) != bsha:
+            changed.add(name)
+    if not changed:
+        raise _Miss("no plan changed")
+    if any(x.name not in summaries for x in new_items):
+        raise _Miss("a corrupt entry")
+    elided = [x for x in new_items if x.name not in changed]
+    blanked = it.blank(text, [(s, e) for x in elided for _, s, e in x.bodies])
+    return _check(path, as_module, stores, overlay, text, blanked, new_items, old_items, elided, changed, summaries, last, values_context)
+
+
+def _check(path, as_module, stores, overlay, text, blanked, new_items, old_items, elided, changed, summaries, last, values_context):
+    from rcsc.checks import check_model, guards, suppress
+    from rcsc.checks.hints import add_hints
+    from rcsc.front import ast
+    from rcsc.front.loader import path_to_files
+    from rcsc.semantics import model as m
+    from rcsc.semantics.sema import ast_to_model
+
+    diags = Diagnostics()
+    loaded = path_to_files(path, diags, as_module, {**overlay, os.path.realpath(path): blanked})
+    if any(f.tree is None for f in loaded) or not loaded[0].is_root:
+        raise _Miss("a syntax error")
+    if any(isinstance(x, (ast.ControllerType, ast.ControllerInstance)) for f in loaded for x in f.tree.items):
+        # The plans of a controller type are the plans of all its
+        # instances, checked as the instances' (and the value analysis
+        # cannot keep their findings between runs): not re-checked in part.
+        raise _Miss("controller types")
+    root = loaded[0].source
+    # The parser must have found the plans the scan found, in every controller.
+    trees = {x.name.name: x for x in loaded[0].tree.items if isinstance(x, ast.Controller)}
+    for x in new_items:
+        c = trees.get(x.name)
+        if c is None or (c.span.start, c.span.end) != (x.start, x.end):
+            raise _Miss("the parser found other controllers than the scan")
+        if [(p.name.name, p.span.end - 1) for p in c.plans] != [(v, e) for v, _, e in x.bodies]:
+            raise _Miss("the parser found other plans than the scan")
+    root.text = text  # the real text: same length, same lines (only blanks differed)
+    design = ast_to_model(loaded, diags)
+    design.values_context = values_context
+    elided_names = {x.name for x in elided}
+    for name in elided_names:
+        design.controllers[name].plans = m.ElidedPlans(summaries[name])
+
+    # Every finding belongs either to an unchanged controller (the last
+    # check's, moved to where that controller is now) or to the rest (this
+    # run's).  This run's findings that belong to an unchanged controller
+    # come from its blanked plans and are dropped.
+    ranges = [(x.start, x.end) for x in elided]
+
+    def in_elided(span: Span | None) -> bool:
+        return span is not None and span.file is root and any(lo <= span.start < hi for lo, hi in ranges)
+
+    def owned(d: Diagnostic) -> bool:
+        """Whether `d` is about an unchanged controller: where it points, or
+        for a finding in shared text (a function, a block type, another
+        file), the instance it names or the controller of its data."""
+        if d.span is not None and d.span.file is root and not _in_gap(d.span.start, new_items):
+            return in_elided(d.span)
+        return any(in_elided(lab.span) for lab in d.labels) or d.data.get("controller") in elided_names
+
+    shift = _shifts(old_items, new_items, elided_names)
+    kept = [d for d in _moved(last, root, shift, loaded) if d is not None and owned(d)]
+    if any(getattr(d, "_edited", False) for d in kept):
+        raise _Miss("a finding with a label in an edited controller")
+    diags.items = [d for d in diags.items if not owned(d)] + kept
+    diags._seen = {(d.code, d.message, d.span.file.path if d.span else "", d.span.start if d.span else -1) for d in diags.items}
+    cached = set(map(id, kept))
+    # The solver-based families skip the whole design when names or types
+    # failed anywhere (`guards.front_end_errors`): the kept findings hold
+    # only if that is as it was.
+    was = any(str(x[1]) == "error" and str(x[0])[1:3] in ("00", "01", "02") for x in last["items"])
+    if guards.front_end_errors(diags) != was:
+        raise _Miss("errors of names or types came or went")
+
+    def same_summaries() -> None:
+        # Asked before the solver families run: a miss then leaves no z3
+        # terms behind to change the witnesses of the full check that follows.
+        for name in changed:
+            if controller_summary(design, design.controllers[name]) != summaries[name]:
+                raise _Miss("an edited controller's summary changed")
+
+    try:
+        check_model(design, diags, guards.Options(store=stores["guards"]), stores["values"], before_solver=same_summaries)
+    except m.PlansElided:
+        raise _Miss("a check read an elided plan") from None
+    diags.items = [d for d in diags.items if id(d) in cached or not owned(d)]
+    fresh = Diagnostics()
+    fresh.items = [d for d in diags.items if id(d) not in cached]
+    add_hints(fresh, design)
+    suppress.apply([f.source for f in loaded], diags, report_unused=not diags.has_errors())
+    from rcsc.driver import CheckResult
+
+    return CheckResult(diags, design, loaded, partial=True)
+
+
+def _shifts(old_items, new_items, elided_names) -> list[tuple[int, int, int, str]]:
+    """The old root text in pieces (old start, old end, offset to add to move
+    it to the new text, kind): "gap" (text between controllers, unchanged),
+    "elided" (an unchanged controller) or "edited" (its offsets mean nothing now)."""
+    out: list[tuple[int, int, int, str]] = []
+    at, delta = 0, 0
+    for (name, s, e, _, _), x in zip(old_items, new_items):
+        out.append((at, s, delta, "gap"))
+        delta = x.start - s
+        out.append((s, e, delta, "elided" if name in elided_names else "edited"))
+        delta = x.end - e
+        at = e
+    out.append((at, 1 << 62, delta, "gap"))
+    return out
+
+
+def _in_gap(at: int, new_items) -> bool:
+    """Whether offset `at` of the new text is outside every controller."""
+    return not any(x.start <= at < x.end for x in new_items)
+
+
+def _moved(last: dict, root: SourceFile, shift, loaded) -> list[Diagnostic | None]:
+    """The last check's findings (before suppression: `suppress.apply`
+    decides again), every span moved to the new text; a finding that points
+    into an edited controller is None, one with a label there is marked
+    `_edited` (its label has no place in the new text)."""
+    by_where = {replays.where_of(f): f.source for f in loaded}
+
+    def piece(s: int):
+        for p in shift:
+            if p[0] <= s < p[1]:
+                return p
+        raise _Miss("a finding outside the text pieces")
+
+    edited: list[bool] = []
+
+    def span(data):
+        if data is None:
+            return None
+        i, s, e = int(data[0]), int(data[1]), int(data[2])
+        if i != 0:
+            src = by_where.get(last["files"][i][1])
+            if src is None:
+                raise _Miss("a finding in a file this run did not read")
+            return Span(src, s, e)
+        _, _, d, kind = piece(s)
+        if kind == "edited":
+            edited.append(True)
+            return None
+        return Span(root, s + d, e + d)
+
+    out: list[Diagnostic | None] = []
+    try:
+        for data in list(last["items"]) + list(last["suppressed"]):
+            if data[0] in _SUPPRESSION_CODES:
+                continue
+            if data[3] is not None and int(data[3][0]) == 0 and piece(int(data[3][1]))[3] == "edited":
+                out.append(None)
+                continue
+            edited.clear()
+            d = replays.decode(data, span)
+            d._edited = bool(edited)  # type: ignore[attr-defined]
+            d.data.pop("suppression", None)
+            out.append(d)
+    except (KeyError, ValueError, TypeError, IndexError):
+        raise _Miss("a corrupt entry") from None
+    return out

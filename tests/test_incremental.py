@@ -1,0 +1,194 @@
+"""The incremental re-check (rcsc.checks.incremental): after an edit inside
+the plans of some controllers, `rcsc check` parses and checks only those
+controllers again, and answers what a full check answers.
+
+The scan that finds controllers and plan bodies without parsing agrees with
+the parser on every design of the repository; an edit inside a plan takes
+the incremental path and gives the full check's report; an edit that
+changes what other controllers see (outside a plan, a verb that can now
+fail, names or types that no longer check, controller types) is checked in
+full; and random edits of random designs (bench/incremental_fuzz.py, a
+bounded slice) give the same reports both ways.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from rcsc.checks import incremental
+from rcsc.diagnostics import Diagnostics
+from rcsc.front import ast
+from rcsc.front import items as it
+from rcsc.front.loader import path_to_files
+from rcsc.front.source import SourceFile
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "bench"))
+
+import incremental_fuzz  # noqa: E402  (bench/incremental_fuzz.py)
+import synthetic  # noqa: E402  (bench/synthetic.py)
+
+
+@pytest.fixture(autouse=True)
+def _cache_on(monkeypatch):
+    monkeypatch.delenv("RCSC_NO_CACHE", raising=False)
+    monkeypatch.delenv("RCSC_INCREMENTAL", raising=False)
+
+
+def _designs() -> list[Path]:
+    return sorted(p for p in ROOT.glob("**/*.rcs") if ".rcsc-cache" not in p.parts and "target" not in p.parts)
+
+
+def test_the_scan_finds_what_the_parser_finds_in_every_design() -> None:
+    compared = 0
+    for path in _designs():
+        text = SourceFile(str(path), path.read_text(encoding="utf-8", errors="replace")).text
+        files = path_to_files(str(path), Diagnostics(), as_module=True)
+        tree = files[0].tree
+        if tree is None:
+            continue
+        found = it.controller_items(text)
+        assert found is not None, path
+        parsed = {x.name.name: x for x in tree.items if type(x) is ast.Controller}
+        assert [x.name for x in found] == list(parsed), path
+        for x in found:
+            c = parsed[x.name]
+            assert (c.span.start, c.span.end) == (x.start, x.end), (path, x.name)
+            assert [(p.name.name, p.span.end - 1) for p in c.plans] == [(v, e) for v, _, e in x.bodies], (path, x.name)
+            compared += 1
+    assert compared > 300
+
+
+def test_the_scan_is_not_fooled_by_comments_strings_and_names() -> None:
+    text = (
+        'design d\n// controller X { plan Y {\n/* } */\nconst plan: i32 = 1\n'
+        'controller A level 1 budget 1 ms {\n    local plan: i32 = 0\n    verbs plan\n'
+        '    plan GO ordered {\n        R1: true | new -> done | x = "}";  // }\n    }\n}\n'
+    )
+    found = it.controller_items(text)
+    assert found is not None and [x.name for x in found] == ["A"]
+    (verb, s, e), = found[0].bodies
+    assert verb == "GO" and text[s:e].strip().startswith("R1:") and text[e] == "}"
+    blanked = it.blank(text, [(s, e)])
+    assert len(blanked) == len(text) and blanked.count("\n") == text.count("\n") and "R1" not in blanked
+    assert it.controller_items("controller A { plan B {") is None  # unbalanced: no guess
+
+
+def _edit(path: Path, old: str, new: str, after: str = "") -> None:
+    text = path.read_text(encoding="utf-8")
+    at = text.index(old, text.index(after) if after else 0)
+    path.write_text(text[:at] + new + text[at + len(old):], encoding="utf-8")
+
+
+def _check(folder: Path, *extra: str, incremental_on: bool = True) -> str:
+    env = {k: v for k, v in os.environ.items() if k != "RCSC_NO_CACHE"}
+    env["PYTHONPATH"] = str(ROOT)
+    if not incremental_on:
+        env["RCSC_INCREMENTAL"] = "0"
+    proc = subprocess.run([sys.executable, "-m", "rcsc", "check", "d.rcs", "--format", "json", *extra], capture_output=True,
+                          text=True, env=env, cwd=folder, timeout=600)
+    assert proc.returncode in (0, 1) and "Traceback" not in proc.stderr, proc.stderr
+    return proc.stdout
+
+
+@pytest.fixture
+def checked(tmp_path: Path) -> Path:
+    """A synthetic design of six controllers, checked once (the cache holds its findings and outline)."""
+    folder = tmp_path / "a"
+    folder.mkdir()
+    (folder / "d.rcs").write_text(synthetic.generate(6, 3, 6), encoding="utf-8")
+    _check(folder)
+    return folder
+
+
+def _both_ways(folder: Path) -> tuple[bool, str, str]:
+    """Whether the re-check of `folder/d.rcs` is incremental, its report and
+    that of a full check with a copy of the same cache."""
+    copy = folder.parent / (folder.name + "-full")
+    shutil.copytree(folder, copy)
+    cwd = os.getcwd()
+    os.chdir(folder)
+    try:
+        used = incremental.recheck("d.rcs", False, ".rcsc-cache") is not None
+        why = incremental.last_miss
+    finally:
+        os.chdir(cwd)
+    os.chdir(copy)
+    try:
+        incremental.recheck("d.rcs", False, ".rcsc-cache")  # the same solver questions on both sides
+    finally:
+        os.chdir(cwd)
+    inc, full = _check(folder), _check(copy, incremental_on=False)
+    assert incremental_fuzz.normalized(inc) == incremental_fuzz.normalized(full), why
+    return used, why, inc
+
+
+def test_an_edit_inside_a_plan_is_rechecked_in_part_and_gives_the_full_report(checked: Path) -> None:
+    # One rule of C1 now leaves a gap in `new` (E0516), below C0 and above C2..C5.
+    _edit(checked / "d.rcs", "<= 1000.0", "<= 999.0", after="controller C1 ")
+    used, why, report = _both_ways(checked)
+    assert used, why
+    assert '"code": "E0516"' in report
+
+
+def test_findings_of_unchanged_controllers_move_with_the_lines_above_them(checked: Path) -> None:
+    # A finding in C4 first, then three lines more in a plan of C1 (above it).
+    _edit(checked / "d.rcs", "<= 1000.0", "<= 999.0", after="controller C4 ")
+    _check(checked)
+    text = (checked / "d.rcs").read_text(encoding="utf-8")
+    at = text.index("plan", text.index("controller C1 "))
+    at = text.index("{", at) + 1
+    (checked / "d.rcs").write_text(text[:at] + "\n\n    // three lines more\n" + text[at:], encoding="utf-8")
+    used, why, report = _both_ways(checked)
+    assert used, why
+    assert '"code": "E0516"' in report
+
+
+@pytest.mark.parametrize(
+    "old, new, why",
+    [
+        ("local count: i32 in 0..1000 = 0", "local count: i32 in 0..1000 = 1", "a controller outside its plans changed"),
+        ("-> error(10)", "-> error(11)", "an edited controller's summary changed"),
+        ("<= 1000.0", "<= true", "errors of names or types came or went"),
+    ],
+)
+def test_edits_that_change_what_others_see_are_checked_in_full(checked: Path, old: str, new: str, why: str) -> None:
+    _edit(checked / "d.rcs", old, new, after="controller C2 ")
+    used, reason, _ = _both_ways(checked)
+    assert not used and reason == why
+
+
+def test_designs_with_controller_types_are_checked_in_full(tmp_path: Path) -> None:
+    import difftest_gen
+
+    for seed in range(40):
+        text = difftest_gen.draw(seed, 0).design
+        if "controller type" in text or "simulator type" in text:
+            break
+    else:
+        pytest.fail("no draw with a controller type")
+    (tmp_path / "d.rcs").write_text(text, encoding="utf-8")
+    _check(tmp_path)
+    edited = incremental_fuzz.edit(text, __import__("random").Random(seed))
+    assert edited is not None
+    (tmp_path / "d.rcs").write_text(edited[0], encoding="utf-8")
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        assert incremental.recheck("d.rcs", False, ".rcsc-cache") is None
+    finally:
+        os.chdir(cwd)
+    assert incremental.last_miss in ("controller types", "an edited controller's summary changed")
+
+
+def test_random_edits_of_random_designs_give_the_full_report(capsys) -> None:
+    """A bounded slice of `python bench/incremental_fuzz.py --seeds A..B`."""
+    assert incremental_fuzz.main(["--seeds", "30..33"]) == 0, capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert " 0 disagreements" in out and "re-checked incrementally" in out
