@@ -41,14 +41,15 @@ def test_check_benchmark_prints_every_column_and_stage() -> None:
     proc = subprocess.run([sys.executable, str(script), "--sizes", "2,3", "--plans", "3", "--rules", "4"], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     rows = [line for line in proc.stdout.splitlines() if line.strip().startswith(("2 ", "3 "))]
-    assert len(rows) == 2 and all(len(r.split("|")) == 5 for r in rows), proc.stdout
+    assert len(rows) == 2 and all(len(r.split("|")) == 6 for r in rows), proc.stdout
     assert "parse" in proc.stdout and "names+types" in proc.stdout and "guards" in proc.stdout
     assert "language server re-check after one edit" in proc.stdout
 
 
 def test_lsp_benchmark_times_every_example_with_the_servers_store() -> None:
-    """bench/bench_lsp.py prints a row per example; it uses the in-memory store of
-    analyses that `rcsc lsp` keeps, so it times what the server does."""
+    """bench/bench_lsp.py prints a row per example; it uses the memory that
+    `rcsc lsp` keeps (the last check, the solver's analyses), so it times what
+    the server does."""
     root = Path(__file__).resolve().parents[1]
     proc = subprocess.run([sys.executable, str(root / "bench" / "bench_lsp.py"), "--runs", "1"], capture_output=True, text=True,
                           cwd=root, timeout=300)
@@ -57,5 +58,5 @@ def test_lsp_benchmark_times_every_example_with_the_servers_store() -> None:
         row = next((ln for ln in proc.stdout.splitlines() if ln.startswith(example.relative_to(root).as_posix())), None)
         assert row is not None, proc.stdout
         assert float(row.split()[1]) > 0 and row.split()[-1] in ("ok", "missed"), row
-    assert "guard_store=store" in (root / "bench" / "bench_lsp.py").read_text(encoding="utf-8")
-    assert "guard_store=self.guard_store" in (root / "rcsc" / "editor" / "lsp.py").read_text(encoding="utf-8")
+    assert "memory=memory" in (root / "bench" / "bench_lsp.py").read_text(encoding="utf-8")
+    assert "memory=self.stores" in (root / "rcsc" / "editor" / "lsp.py").read_text(encoding="utf-8")
