@@ -192,3 +192,30 @@ def test_random_edits_of_random_designs_give_the_full_report(capsys) -> None:
     assert incremental_fuzz.main(["--seeds", "30..33"]) == 0, capsys.readouterr().out
     out = capsys.readouterr().out
     assert " 0 disagreements" in out and "re-checked incrementally" in out
+
+
+@pytest.mark.parametrize("form", ["crlf", "bom", "tabs"])
+def test_line_ends_byte_order_marks_and_tabs_keep_every_place(tmp_path: Path, form: str) -> None:
+    """The scan, the blanking and the moved findings work on the text as the
+    checker sees it (a byte-order mark dropped, CRLF kept, tabs counted as
+    one column): the report equals the full check's."""
+    text = synthetic.generate(4, 2, 5)
+    # A finding in C3 that must move when C1 grows.
+    at = text.index("<= 1000.0", text.index("controller C3 "))
+    text = text[:at] + "<= 999.0" + text[at + len("<= 1000.0"):]
+    if form == "crlf":
+        text = text.replace("\n", "\r\n")
+    elif form == "bom":
+        text = "\ufeff" + text
+    else:
+        text = text.replace("    ", "\t")
+    folder = tmp_path / "a"
+    folder.mkdir()
+    (folder / "d.rcs").write_bytes(text.encode("utf-8"))
+    _check(folder)
+    nl = "\r\n" if form == "crlf" else "\n"
+    at = text.index("{", text.index("plan", text.index("controller C1 "))) + 1
+    (folder / "d.rcs").write_bytes((text[:at] + nl + nl + "    // more lines" + nl + text[at:]).encode("utf-8"))
+    used, why, report = _both_ways(folder)
+    assert used, why
+    assert '"code": "E0516"' in report
