@@ -144,7 +144,6 @@ def _check(path: str, as_module: bool = False, cache: bool = True, replay: bool 
 
         quick = incremental.recheck(path, as_module, folder_for(path))
         if quick is not None:
-            replays.remember(path, as_module, folder_for(path), quick)
             incremental.remember(path, as_module, folder_for(path), quick)
             return quick
     driver = _load_driver()
@@ -161,7 +160,6 @@ def _check(path: str, as_module: bool = False, cache: bool = True, replay: bool 
     except driver.InputError as exc:
         raise UsageError(str(exc)) from exc
     if cache and replay:
-        replays.remember(path, as_module, folder_for(path), result)
         incremental.remember(path, as_module, folder_for(path), result)
     return result
 

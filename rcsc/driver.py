@@ -67,12 +67,11 @@ def check_path(
     try:
         if memory is None:
             return _check_path(path, as_module, overlay, cache_dir, keep_plans, guard_store)
-        from rcsc.checks import incremental, replay
+        from rcsc.checks import incremental
 
         result = incremental.recheck(path, as_module, None, stores=memory, overlay=overlay)
         if result is None:
             result = _check_path(path, as_module, overlay, None, keep_plans, memory["guards"])
-        replay.remember(path, as_module, None, result, into=memory[replay.NAMESPACE])
         incremental.remember(path, as_module, None, result, stores=memory)
         return result
     finally:

@@ -88,9 +88,14 @@ def memory_stores(solver_store: cache.MemoryStore) -> dict:
 
 
 def remember(path: str, as_module: bool, folder: str | None, result, stores: dict | None = None) -> None:
-    """Store the outline of the root file of a check (`result`, a
-    `rcsc.driver.CheckResult`) next to its findings (`replay.remember`), in
+    """Keep a check (`result`, a `rcsc.driver.CheckResult`) for the next run:
+    its findings (`replay.remember`) and the outline of its root file, in
     `folder` or in `stores` (`memory_stores`)."""
+    replays.remember(path, as_module, folder, result, into=stores[replays.NAMESPACE] if stores is not None else None)
+    _remember_outline(path, as_module, folder, result, stores)
+
+
+def _remember_outline(path: str, as_module: bool, folder: str | None, result, stores: dict | None) -> None:
     design = getattr(result, "model", None)
     loaded = getattr(result, "files", None)
     if (stores is None and cache.disabled_by_environment()) or design is None or not loaded or not loaded[0].is_root:
