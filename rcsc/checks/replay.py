@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from rcsc.checks import cache
 from rcsc.outputs import safeio
 from rcsc.diagnostics import Diagnostic, Diagnostics, Label, Severity
-from rcsc.front.source import SourceFile, Span
+from rcsc.front.source import SourceFile, Span, normalized
 
 NAMESPACE = "result"
 FORMAT = 1
@@ -180,7 +180,7 @@ class Replayed:
 
 def _root_text(path: str) -> str | None:
     text = _read_text(path)
-    return None if text is None else SourceFile(path, text).text
+    return None if text is None else normalized(text)
 
 
 def lookup(path: str, as_module: bool, folder: str) -> Replayed | None:

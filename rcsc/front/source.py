@@ -41,13 +41,26 @@ class SourceFile:
 
     path: str
     text: str
-    _line_starts: list[int] = field(default_factory=list, repr=False)
+    _starts: list[int] | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self.text = normalized(self.text)
-        # Line starts from the line lengths (done in C: a large design has
-        # hundreds of thousands of lines).
-        self._line_starts = [0, *itertools.accumulate(len(line) + 1 for line in self.text.split("\n")[:-1])]
+
+    @property
+    def _line_starts(self) -> list[int]:
+        """The offset of each line's first character.  Made on first use: a
+        check that reports nothing in a file (a replayed check, most files of
+        a large design) never needs the lines of its hundreds of thousands
+        of lines.  Made from the line lengths, in C."""
+        starts = self._starts
+        if starts is None:
+            lengths = map(len, self.text.split("\n")[:-1])
+            starts = self._starts = [0, *itertools.accumulate(map((1).__add__, lengths))]
+        return starts
+
+    @_line_starts.setter
+    def _line_starts(self, starts: list[int]) -> None:
+        self._starts = starts
 
     def line_col(self, offset: int) -> tuple[int, int]:
         """1-based (line, column) of a character offset."""
