@@ -11,7 +11,7 @@ in memory (`MemoryStore`).  `--no-cache` (or
 
 Each entry is one JSON file named by the SHA-256 of its key.  The file
 holds a format number, the key, the version of the code that wrote it (a
-hash of rcsc's own sources and the z3 version, so an upgrade never reads an
+hash of rcsc's own sources and of the installed z3, so an upgrade never reads an
 old entry) and a checksum of the payload.  Writes are atomic
 (`rcsc.outputs.safeio.write_file`).  An entry that is missing, stale, truncated or
 otherwise corrupt is ignored (the result is computed again and the entry
@@ -43,15 +43,35 @@ _MAX_ENTRY = 16 * 1024 * 1024  # bytes; a larger file is not an entry of ours
 
 @lru_cache(maxsize=1)
 def code_version() -> str:
-    """A hash of the sources of the installed rcsc package and of the z3 version."""
-    import z3
-
-    digest = hashlib.sha256(z3.get_version_string().encode())
+    """A hash of the sources of the installed rcsc package and of the installed z3."""
+    digest = hashlib.sha256(_z3_identity())
     base = Path(__file__).resolve().parents[1]  # the rcsc package, not this folder
     for path in sorted(base.rglob("*.py")):
         digest.update(str(path.relative_to(base)).encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()[:32]
+
+
+def _z3_identity() -> bytes:
+    """What tells one installed z3 from another, without importing it (an
+    unchanged design is answered from the cache in a fraction of the time
+    z3's import takes): its generated API module and the size and time of
+    each of its libraries.  A z3 installed otherwise is asked its version."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("z3")
+    folder = os.path.dirname(spec.origin) if spec is not None and spec.origin else ""
+    try:
+        out = [Path(folder, "z3core.py").read_bytes()]
+        lib = os.path.join(folder, "lib")
+        for name in sorted(os.listdir(lib)):
+            st = os.stat(os.path.join(lib, name))
+            out.append(f"{name}:{st.st_size}:{st.st_mtime_ns}".encode())
+    except OSError:
+        import z3
+
+        return z3.get_version_string().encode()
+    return b"\x00".join(out)
 
 
 def folder_for(design_path: str) -> str:
