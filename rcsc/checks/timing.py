@@ -121,15 +121,19 @@ def crossings(design: Design) -> list[m.Crossing]:
     ctrls = design.controllers
     out: list[m.Crossing] = []
     writer_cpu: dict[str, str] = {}
+    reader_cpus: dict[str, set[str]] = {}  # one pass over the reads, not one per buffer
     for c in ctrls.values():
+        if not c.cpu:
+            continue
         for use in c.writes:
-            if c.cpu:
-                writer_cpu.setdefault(use.name, c.cpu)
+            writer_cpu.setdefault(use.name, c.cpu)
+        for use in c.reads:
+            reader_cpus.setdefault(use.name, set()).add(c.cpu)
     for name in design.gm:
         w = writer_cpu.get(name)
         if w is None:
             continue
-        readers = {c.cpu for c in ctrls.values() if c.cpu and c.cpu != w and any(u.name == name for u in c.reads)}
+        readers = reader_cpus.get(name, set()) - {w}
         if readers:
             out.append(m.Crossing("gm", name, w, _in_cpu_order(design, readers)))
     for c in ctrls.values():
