@@ -58,3 +58,20 @@ def test_grammar_cache_is_private_and_reused(tmp_path, monkeypatch) -> None:
     files = list((tmp_path / "rcsc").iterdir())
     assert len(files) == 1 and files[0].name.startswith("rcs-lark")
     assert (tmp_path / "rcsc").stat().st_mode & 0o077 == 0
+
+
+def test_check_of_valid_files_does_not_load_the_parser_generator(tmp_path) -> None:
+    """Lark is the reference parser for the files the fast parser gives up on
+    (syntax errors); a check of valid files (here an example with imports)
+    never imports it, a file with a syntax error does."""
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    example = os.path.join(here, "examples", "machining_cell", "machining_cell.rcs")
+    code, modules = _modules(["check", example, "--no-cache", "--format", "short"])
+    assert code in (0, 1)
+    assert "rcsc.driver" in modules and "rcsc.front.rdparse" in modules
+    assert not any(m == "lark" or m.startswith("lark.") for m in modules)
+    bad = tmp_path / "bad.rcs"
+    bad.write_text("design bad\ncontroller C {\n", encoding="utf-8")
+    code, modules = _modules(["check", str(bad), "--no-cache", "--format", "short"])
+    assert code == 1
+    assert "lark" in modules

@@ -1,6 +1,6 @@
 """The fast front end: tokens (`rcsc.front.lexer`) to AST (`rcsc.front.ast`) by recursive descent.
 
-`grammar/rcs.lark` stays the reference grammar and `rcsc.front.parse` its
+`grammar/rcs.lark` stays the reference grammar and `rcsc.front.lark_parse` its
 reference parser.  This parser accepts the same language and builds the same
 tree, span for span, without a parse tree in between; a test
 (tests/test_fastparse.py) holds the two together on every design in the
@@ -22,7 +22,7 @@ an expression only at the top level of one, `not` only at the `not` level,
 so `-not` is the name `not`, as in the reference parser).
 
 Adding a construct to the grammar (`grammar/rcs.lark`) means, besides the
-Lark transformer method in `rcsc.front.parse` and the field in `rcsc.front.ast`:
+Lark transformer method in `rcsc.front.lark_parse` and the field in `rcsc.front.ast`:
 
 - one method here and one entry in a dispatch table: `_ITEMS` (top-level
   items), `_CTRL_ATTRS` (`controller X level 1 budget 2 ms ...`),

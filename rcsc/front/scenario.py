@@ -24,7 +24,7 @@ from lark import Lark
 from rcsc.front import ast
 from rcsc.semantics import model as m
 from rcsc.diagnostics import Diagnostics
-from rcsc.front.parse import _ToAst, parse_with
+from rcsc.front.lark_parse import _ToAst, parse_with
 from rcsc.front.source import SourceFile, Span
 from rcsc.semantics.typecheck import Checker, Globals, Scope
 from rcsc.semantics.types import BOOL, ERROR, I32, ErrorType, Type
