@@ -30,6 +30,12 @@ the other controllers again:
    this run's findings everywhere else; suppressions (`rcsc: allow`) are
    applied to the whole again.
 
+In a long-lived process (the language server, `memory_stores`) the
+unchanged controllers are not even parsed again: the syntax tree each one
+had with its plan bodies blank is kept from one re-check to the next and
+moved to where the controller now starts (`_KeptTree`), and their
+semantic pass models no plans (`ast_to_model(elided_plans=...)`).
+
 The answer is the one a full check with the same cache gives, finding for
 finding (tests/test_incremental.py edits designs at random and compares).
 Only `rcsc check` uses it: the result carries findings, not a model.
@@ -49,6 +55,10 @@ from rcsc.outputs import safeio
 
 NAMESPACE = "outline"
 FORMAT = 1
+# In a long-lived process only (`memory_stores`): the syntax trees of the
+# unchanged controllers, kept from one re-check to the next (`_KeptTree`).
+TREES = "trees"
+_KEPT_DESIGNS = 8  # designs whose trees are kept (the oldest go first)
 # The findings that `rcsc.checks.suppress` makes: computed again over the whole text.
 _SUPPRESSION_CODES = frozenset(("W0008",))
 
@@ -84,7 +94,7 @@ def memory_stores(solver_store: cache.MemoryStore) -> dict:
     """Stores in memory, for a long-lived process (the language server); the
     solver's analyses in `solver_store`, which the process keeps anyway."""
     return {NAMESPACE: cache.MemoryStore(limit=64), replays.NAMESPACE: cache.MemoryStore(limit=64), "guards": solver_store,
-            "values": solver_store}
+            "values": solver_store, TREES: {}}
 
 
 def remember(path: str, as_module: bool, folder: str | None, result, stores: dict | None = None) -> None:
@@ -132,6 +142,8 @@ class _Miss(Exception):
 
 # Why the last `recheck` did not apply (for tests and bench/incremental_fuzz.py).
 last_miss = ""
+# How many controllers' kept syntax trees the last `recheck` used (for tests).
+last_kept = 0
 
 
 def recheck(path: str, as_module: bool, folder: str | None, stores: dict | None = None, overlay: dict[str, str] | None = None):
@@ -146,8 +158,8 @@ def recheck(path: str, as_module: bool, folder: str | None, stores: dict | None 
     # As in `rcsc.driver.check_path`: no cyclic collection during the run.
     was_enabled = gc.isenabled()
     gc.disable()
-    global last_miss
-    last_miss = ""
+    global last_miss, last_kept
+    last_miss, last_kept = "", 0
     try:
         return _recheck(path, as_module, stores if stores is not None else stores_in(folder), overlay or {})  # type: ignore[arg-type]
     except _Miss as miss:
@@ -200,9 +212,11 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
     if [x.name for x in new_items] != [n for n, *_ in old_items]:
         raise _Miss("controllers added, removed or renamed")
     changed: set[str] = set()
+    outlines: dict[str, str] = {}
     for x, (name, _, _, osha, bsha) in zip(new_items, old_items):
         if it.digest(x.outline(text)) != osha:
             raise _Miss("a controller outside its plans changed")
+        outlines[name] = osha
         if it.digest(x.body_text(text)) != bsha:
             changed.add(name)
     if not changed:
@@ -210,11 +224,112 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
     if any(x.name not in summaries for x in new_items):
         raise _Miss("a corrupt entry")
     elided = [x for x in new_items if x.name not in changed]
-    blanked = it.blank(text, [(s, e) for x in elided for _, s, e in x.bodies])
-    return _check(path, as_module, stores, overlay, text, blanked, new_items, old_items, elided, changed, summaries, last, values_context)
+    kept = _kept_trees(stores, key, elided, outlines)
+    # The parser reads the edited controllers whole, the other controllers
+    # with their plan bodies blank, and nothing of those whose tree is kept.
+    blanked = it.blank(text, [r for x in elided for r in ([(x.start, x.end)] if x.name in kept else [(s, e) for _, s, e in x.bodies])])
+    return _check(path, as_module, stores, overlay, text, blanked, new_items, old_items, elided, changed, summaries, last, values_context,
+                  kept, outlines)
 
 
-def _check(path, as_module, stores, overlay, text, blanked, new_items, old_items, elided, changed, summaries, last, values_context):
+# ---- syntax trees kept between re-checks (a long-lived process) -----------------------------
+
+
+class _KeptTree:
+    """The syntax tree of one controller as the parser built it from the
+    controller's text with its plan bodies blank, and every span in it.
+
+    Such a tree depends only on the controller's outline and on the length
+    of each plan body (`key`): when both are as they were, the tree is the
+    one the parser would build again, but at another offset if the text
+    before the controller changed length.  Moving it there means adding
+    that difference to each of its spans, which is much cheaper than
+    parsing the controller again (a 200-controller design re-parses 3,400
+    verbs and their parameters otherwise).  The spans are moved in place:
+    the tree belongs to the last check only, which the next one replaces.
+    """
+
+    __slots__ = ("key", "start", "tree", "spans")
+
+    def __init__(self, key: tuple, start: int, tree, spans: list[Span]) -> None:
+        self.key = key
+        self.start = start
+        self.tree = tree
+        self.spans = spans
+
+    def move_to(self, root: SourceFile, start: int) -> None:
+        delta = start - self.start
+        for span in self.spans:
+            span.file = root
+            if delta:
+                span.start += delta
+                span.end += delta
+        self.start = start
+
+
+def _tree_key(x: it.ControllerItem, outline_sha: str) -> tuple:
+    return (outline_sha, tuple(e - s for _, s, e in x.bodies))
+
+
+def _kept_trees(stores: dict, key: str, elided: list, outlines: dict[str, str]) -> dict[str, _KeptTree]:
+    """The kept trees of the elided controllers `elided` that are still
+    their trees (same outline, same plan body lengths)."""
+    designs = stores.get(TREES)
+    found = designs.get(key) if designs is not None else None
+    if not found:
+        return {}
+    out = {}
+    for x in elided:
+        k = found.get(x.name)
+        if k is not None and k.key == _tree_key(x, outlines[x.name]):
+            out[x.name] = k
+    return out
+
+
+def _spans_of(node) -> list[Span]:
+    """Every span in the syntax tree `node`, each once (a span object can be shared by nodes)."""
+    from rcsc.front import ast
+
+    out: list[Span] = []
+    seen: set[int] = set()
+    stack = [node]
+    slots_of: dict[type, tuple[str, ...]] = {}
+    while stack:
+        x = stack.pop()
+        if isinstance(x, Span):
+            if id(x) not in seen:
+                seen.add(id(x))
+                out.append(x)
+        elif isinstance(x, (list, tuple)):
+            stack.extend(x)
+        elif isinstance(x, ast._Slots):
+            names = slots_of.get(type(x))
+            if names is None:
+                names = slots_of[type(x)] = tuple(n for k in type(x).__mro__ for n in getattr(k, "__slots__", ()))
+            for n in names:
+                v = getattr(x, n, None)
+                if v is not None and not isinstance(v, (str, int, float)):
+                    stack.append(v)
+    return out
+
+
+def _keep_trees(stores: dict, key: str, trees: dict, elided: list, kept: dict[str, _KeptTree], outlines: dict[str, str]) -> None:
+    designs = stores.get(TREES)
+    if designs is None:
+        return
+    found = designs.pop(key, {})
+    for x in elided:
+        if x.name not in kept and x.name in trees:
+            tree = trees[x.name]
+            if tree.doc is None:  # a doc comment lies before the controller: blanking it would orphan it
+                found[x.name] = _KeptTree(_tree_key(x, outlines[x.name]), x.start, tree, _spans_of(tree))
+    designs[key] = found
+    while len(designs) > _KEPT_DESIGNS:
+        del designs[next(iter(designs))]
+
+
+def _check(path, as_module, stores, overlay, text, blanked, new_items, old_items, elided, changed, summaries, last, values_context,
+           kept, outlines):
     from rcsc.checks import check_model, guards, suppress
     from rcsc.checks.hints import add_hints
     from rcsc.front import ast
@@ -232,8 +347,18 @@ def _check(path, as_module, stores, overlay, text, blanked, new_items, old_items
         # cannot keep their findings between runs): not re-checked in part.
         raise _Miss("controller types")
     root = loaded[0].source
-    # The parser must have found the plans the scan found, in every controller.
     trees = {x.name.name: x for x in loaded[0].tree.items if isinstance(x, ast.Controller)}
+    if kept:
+        if any(name in trees for name in kept):
+            raise _Miss("the parser found a controller where the text was blank")
+        for x in new_items:
+            if x.name in kept:
+                kept[x.name].move_to(root, x.start)
+                trees[x.name] = kept[x.name].tree
+        loaded[0].tree.items = sorted([*loaded[0].tree.items, *(k.tree for k in kept.values())], key=lambda n: n.span.start)
+        global last_kept
+        last_kept = len(kept)
+    # The parser must have found the plans the scan found, in every controller.
     for x in new_items:
         c = trees.get(x.name)
         if c is None or (c.span.start, c.span.end) != (x.start, x.end):
@@ -241,11 +366,16 @@ def _check(path, as_module, stores, overlay, text, blanked, new_items, old_items
         if [(p.name.name, p.span.end - 1) for p in c.plans] != [(v, e) for v, _, e in x.bodies]:
             raise _Miss("the parser found other plans than the scan")
     root.text = text  # the real text: same length, same lines (only blanks differed)
-    design = ast_to_model(loaded, diags)
-    design.values_context = values_context
+    root._starts = None
+    _keep_trees(stores, replays.key_of(path, as_module), trees, elided, kept, outlines)
     elided_names = {x.name for x in elided}
-    for name in elided_names:
-        design.controllers[name].plans = m.ElidedPlans(summaries[name])
+    try:
+        design = ast_to_model(loaded, diags, elided_plans={name: summaries[name] for name in elided_names})
+    except m.PlansElided:
+        raise _Miss("the semantic pass read an elided plan") from None
+    design.values_context = values_context
+    if any(not m.is_elided(design.controllers[name]) for name in elided_names):
+        raise _Miss("the semantic pass modelled an elided controller's plans")
 
     # Every finding belongs either to an unchanged controller (the last
     # check's, moved to where that controller is now) or to the rest (this

@@ -43,6 +43,7 @@ class _Sema:
         self.g.resolve_fn = self._fn_body
         self.fn_busy: set[str] = set()
         self.release_plans = False
+        self.elided_plans: dict[str, dict] = {}
         self.decls: dict[str, ast.Node] = {}
         self.const_ast: dict[str, ast.Const] = {}
         self.const_busy: set[str] = set()
@@ -426,6 +427,12 @@ class _Sema:
             c.pre.extend(checker.stmts(block))
         for _, block in item.post:
             c.post.extend(checker.stmts(block))
+        summary = self.elided_plans.get(c.name)
+        if summary is not None:
+            # Its plans are the last check's (their findings too); what
+            # other controllers' checks need of them is the summary.
+            c.plans = m.ElidedPlans(summary)
+            return
         for plan in item.plans:
             verb_name = plan.name.name
             if verb_name in c.plans:
@@ -526,15 +533,20 @@ class _Sema:
         return out
 
 
-def ast_to_model(files: list[LoadedFile], diags: Diagnostics, release_plans: bool = False) -> m.Design:
+def ast_to_model(files: list[LoadedFile], diags: Diagnostics, release_plans: bool = False,
+                 elided_plans: dict[str, dict] | None = None) -> m.Design:
     """Resolve and type-check the loaded files into one design model.
 
     With `release_plans`, each controller's plans are removed from its syntax
-    tree once converted (`rcsc check` needs only the model afterwards)."""
+    tree once converted (`rcsc check` needs only the model afterwards).
+    `elided_plans` (an incremental re-check, `rcsc.checks.incremental`) maps
+    controllers whose plans are not modelled to the summary that stands for
+    them (`model.ElidedPlans`)."""
     root = next((f for f in files if f.is_root), files[0])
     name = root.tree.name.name if root.tree is not None and root.tree.name is not None else "design"
     s = _Sema(files, diags)
     s.release_plans = release_plans
+    s.elided_plans = elided_plans or {}
     s.collect()
     s.types()
     s.globals_()

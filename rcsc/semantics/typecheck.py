@@ -555,6 +555,11 @@ class Checker:
     def e_Unary(self, node: ast.Unary, expected: Type | None) -> m.Expr:
         if node.op == "-" and isinstance(node.operand, ast.IntLit):
             return self._int_value(-node.operand.value, node.span, expected)
+        if node.op == "-" and type(node.operand) is ast.FloatLit:
+            # What folding `-(literal)` gives (a float literal is `f64`
+            # whatever the context), without building and evaluating the
+            # negation: ranges and guards are full of negative literals.
+            return m.Const(node.span, F64, -node.operand.value)
         if node.op == "not":
             operand = self.expect(node.operand, BOOL, "`not` needs a `bool`")
             return self.fold(m.Unary(node.span, BOOL, "not", operand))
