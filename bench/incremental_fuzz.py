@@ -3,6 +3,7 @@
 
     python bench/incremental_fuzz.py --seeds 0..49          # designs of the differential tester, edited
     python bench/incremental_fuzz.py --seeds 0..9 --keep /tmp/incr-fails
+    python bench/incremental_fuzz.py --seeds 0..49 --memory  # as the language server re-checks
 
 For each seed it takes a design (the differential tester's draw for the seed,
 unchecked, so it may hold findings; or an example or a synthetic design),
@@ -15,6 +16,11 @@ solver cache).  The two JSON reports must be equal byte for byte, and so
 must the SARIF reports (which list suppressed findings).  Each check is a
 process of its own: z3's answers, so the witnesses, depend on what the
 process asked before.
+
+With `--memory` it re-checks successive edits in one process, as the
+language server does (the unchanged controllers' syntax trees kept between
+re-checks), and compares the places of every finding and label with a full
+check's.
 
 It prints how many edits took the incremental path (the others are
 checked in full: an edit that changes what other controllers see, a design
@@ -208,13 +214,82 @@ def run_seed(seed: int, work: Path) -> dict:
     return {"seed": seed, "used": used, "miss": miss, "ok": ok, "exact": exact, "edits": what, "inc": inc, "full": full}
 
 
+def places(result) -> list:
+    """Each finding of a `rcsc.driver.CheckResult` by code and place, its
+    labels' places included (witness texts left out: two checks in one
+    process can get different, equally valid, answers from z3)."""
+    def at(span):
+        return None if span is None else (span.file.path, span.start, span.end, span.line, span.col)
+
+    return sorted((d.code, str(d.severity), at(d.span), [at(lab.span) for lab in d.labels]) for d in result.diags.items)
+
+
+def run_seed_in_memory(seed: int, work: Path, edits: int = 6) -> dict:
+    """The language server's way (`--memory`): one process keeps the last
+    check, the solver's answers and the unchanged controllers' syntax trees
+    in memory (`incremental.memory_stores`); `edits` successive random edits
+    of the seed's design are each re-checked that way and compared, place
+    for place, with a full check of the same text."""
+    import random
+
+    from rcsc.checks import cache, incremental
+    from rcsc.driver import check_path
+
+    folder = work / f"m{seed}"
+    folder.mkdir()
+    path = folder / "d.rcs"
+    text = design_for(seed)
+    path.write_text(text, encoding="utf-8")
+    real = os.path.realpath(path)
+    memory = incremental.memory_stores(cache.MemoryStore())
+    check_path(str(path), memory=memory)
+    rng = random.Random(seed)
+    used = kept = 0
+    done: list[str] = []
+    for _ in range(edits):
+        edited = edit(text, rng)
+        if edited is None:
+            break
+        text = edited[0]
+        done.append("; ".join(edited[1]))
+        result = check_path(str(path), overlay={real: text}, memory=memory)
+        used += bool(getattr(result, "partial", False))
+        kept += incremental.last_kept
+        full = check_path(str(path), overlay={real: text}, guard_store=memory["guards"])
+        if places(result) != places(full):
+            path.write_text(text, encoding="utf-8")
+            return {"seed": seed, "used": used, "kept": kept, "ok": False, "edits": done}
+    return {"seed": seed, "used": used, "kept": kept, "ok": True, "edits": done}
+
+
+def main_memory(lo: int, hi: int, keep: str | None, verbose: bool) -> int:
+    used = kept = bad = checks = 0
+    with tempfile.TemporaryDirectory(prefix="incr-fuzz-") as tmp:
+        for seed in range(lo, hi + 1):
+            r = run_seed_in_memory(seed, Path(tmp))
+            used, kept, checks = used + r["used"], kept + r["kept"], checks + len(r["edits"])
+            if verbose:
+                print(f"seed {seed}: {r['used']} of {len(r['edits'])} re-checks in part, {r['kept']} kept trees used")
+            if not r["ok"]:
+                bad += 1
+                print(f"seed {seed}: DISAGREE after {r['edits']}")
+                if keep:
+                    shutil.copytree(Path(tmp) / f"m{seed}", Path(keep) / f"m{seed}", dirs_exist_ok=True)
+    print(f"{hi - lo + 1} designs, {checks} successive edits in memory, {used} re-checked in part, "
+          f"{kept} kept controller trees used, {bad} disagreements")
+    return 1 if bad else 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", default="0..19", help="A..B (inclusive)")
     ap.add_argument("--keep", help="copy the folders of disagreeing seeds here")
     ap.add_argument("-v", "--verbose", action="store_true", help="one line per seed: the path taken and the edits")
+    ap.add_argument("--memory", action="store_true", help="the language server's way: successive edits re-checked in one process")
     args = ap.parse_args(argv)
     lo, hi = (int(x) for x in args.seeds.split(".."))
+    if args.memory:
+        return main_memory(lo, hi, args.keep, args.verbose)
     used = bad = skipped = exact = 0
     with tempfile.TemporaryDirectory(prefix="incr-fuzz-") as tmp:
         for seed in range(lo, hi + 1):

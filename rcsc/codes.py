@@ -883,8 +883,9 @@ time-out rule.
 """),
     ("W0518", _W, "guard analysis incomplete", """
 The SMT solver could not decide a question about this plan's conditions within
-its budget (a per-query time-out and a deterministic resource limit), or a
-condition could not be encoded. The analysis never counts that as a pass: the
+its budget (a deterministic resource limit per question, so that every
+machine gives the same answer; a time-out far above it is only a safety net),
+or a condition could not be encoded. The analysis never counts that as a pass: the
 rest of the plan is not analysed and this finding says what was being asked.
 Simplify the condition, for example by computing a non-linear term in `pre`.
 """),

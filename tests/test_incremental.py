@@ -221,16 +221,6 @@ def test_line_ends_byte_order_marks_and_tabs_keep_every_place(tmp_path: Path, fo
     assert '"code": "E0516"' in report
 
 
-def _places(result) -> list:
-    """Each finding by code and place, its labels' places included (what
-    moving a kept syntax tree could get wrong; witness texts can differ
-    between the two checks of one process, as z3 has seen other terms)."""
-    def at(span):
-        return None if span is None else (span.file.path, span.start, span.end, span.line, span.col)
-
-    return sorted((d.code, str(d.severity), at(d.span), [at(lab.span) for lab in d.labels]) for d in result.diags.items)
-
-
 @pytest.mark.parametrize("seed", [8, 18, 28, 3])
 def test_a_language_server_keeps_unchanged_controllers_trees_between_edits(tmp_path: Path, seed: int) -> None:
     """In a long-lived process (`memory_stores`), the syntax trees of the
@@ -238,30 +228,7 @@ def test_a_language_server_keeps_unchanged_controllers_trees_between_edits(tmp_p
     to their new offsets instead of being parsed again.  Successive random
     edits (which change lengths above other controllers) give the places of
     a full check, finding for finding and label for label."""
-    import random
-
-    from rcsc.checks import cache
-    from rcsc.driver import check_path
-
-    path = tmp_path / "d.rcs"
-    text = incremental_fuzz.design_for(seed)
-    path.write_text(text, encoding="utf-8")
-    memory = incremental.memory_stores(cache.MemoryStore())
-    check_path(str(path), memory=memory)
-    rng = random.Random(seed)
-    real = os.path.realpath(path)
-    kept = incremental_used = 0
-    for _ in range(6):
-        edited = incremental_fuzz.edit(text, rng)
-        if edited is None:
-            break
-        text = edited[0]
-        result = check_path(str(path), overlay={real: text}, memory=memory)
-        incremental_used += bool(getattr(result, "partial", False))
-        kept += incremental.last_kept
-        # The full check reads the solver's analyses from the same store:
-        # what it compares is places, not z3's choices between equal answers.
-        full = check_path(str(path), overlay={real: text}, guard_store=memory["guards"])
-        assert _places(result) == _places(full), (edited[1], incremental.last_miss)
+    r = incremental_fuzz.run_seed_in_memory(seed, tmp_path)
+    assert r["ok"], r["edits"]
     if seed % 10 == 8:  # the synthetic designs: edits inside plans, re-checked in part
-        assert incremental_used >= 3 and kept > 0
+        assert r["used"] >= 3 and r["kept"] > 0

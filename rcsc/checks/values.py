@@ -48,7 +48,10 @@ from rcsc.semantics.model import Design
 from rcsc.checks.smt import F, Encoder, HasTypeError, Unsupported, concrete, format_value, real_of
 from rcsc.semantics.types import DURATION, FloatType, IntType, RecordType, Type
 
-TIMEOUT_MS = 2000
+# As in `rcsc.checks.guards`: the resource limit decides (1M units, about
+# 1 s on a loaded CI machine); the time-out is a safety net far above it, so
+# that the findings never depend on the machine's load.
+TIMEOUT_MS = 60_000
 RLIMIT = 1_000_000
 I64 = IntType("i64", 64, True)
 
