@@ -24,12 +24,14 @@ in-process CPU time of each stage of one cold run (`rcsc.driver` step by
 step: reading and parsing, names and types, each check family; the guard
 analysis without cache), and the CPU time of the language server's
 re-check after the same one-rule edit (in process, `driver.check_path` with
-the overlay and the server's memory of the last check and of the solver's
-analyses, filled by a first check: the incremental re-check).  --profile prints the top cProfile hotspots of one
+the overlay and the server's memory of the last check, of the solver's
+analyses and of the unchanged controllers' syntax trees, filled by a first
+check: the incremental re-check), for the first edit after a full check and
+for a later one.  --profile prints the top cProfile hotspots of one
 in-process run of the largest size.
 
 Goals (200 controllers): cold <= 3 s CPU and <= 400 MiB, t(200)/t(100)
-<= 2.1, edit <= 0.3 s.  Missed goals are reported, not errors.
+<= 2.1, edit <= 0.3 s (a fresh process, and the language server).  Missed goals are reported, not errors.
 """
 
 from __future__ import annotations
@@ -83,11 +85,11 @@ def run_command(path: Path, *extra: str, incremental: bool = True) -> dict:
     return {"cpu": usage.ru_utime + usage.ru_stime, "wall": wall, "rss": rss, "rc": proc.returncode}
 
 
-def edit_one_rule(text: str) -> str:
+def edit_one_rule(text: str, to: str = "999.0") -> str:
     """The design with the first `<= 1000.0` of controller C0's guards changed (one rule of one controller)."""
     start = text.index("controller C0 ")
     i = text.index("<= 1000.0", start)
-    return text[:i] + "<= 999.0" + text[i + len("<= 1000.0"):]
+    return text[:i] + "<= " + to + text[i + len("<= 1000.0"):]
 
 
 def stages(path: Path) -> dict[str, float]:
@@ -118,19 +120,35 @@ def stages(path: Path) -> dict[str, float]:
     return out
 
 
-def server_edit(path: Path) -> float:
+def server_edit(path: Path) -> tuple[float, float]:
     """CPU seconds of the language server's re-check after one edit (in
-    process, what `rcsc lsp` keeps between checks: the last check and the
-    solver's analyses in memory; the incremental re-check applies)."""
+    process, what `rcsc lsp` keeps between checks: the last check, the
+    solver's analyses and the unchanged controllers' syntax trees in
+    memory; the incremental re-check applies): the first edit after a full
+    check, and the same one-rule edit made later, after an edit elsewhere
+    (the server has re-checked the design before, as it does while the
+    engineer types)."""
     from rcsc.checks import cache, incremental
     from rcsc.driver import check_path
 
+    real = os.path.realpath(path)
     memory = incremental.memory_stores(cache.MemoryStore())
+    text = path.read_text(encoding="utf-8")
     check_path(str(path), memory=memory)
-    edited = edit_one_rule(path.read_text(encoding="utf-8"))
+    edited = edit_one_rule(text)
     t = time.process_time()
-    check_path(str(path), overlay={os.path.realpath(path): edited}, memory=memory)
-    return time.process_time() - t
+    check_path(str(path), overlay={real: edited}, memory=memory)
+    first = time.process_time() - t
+    # An edit elsewhere (the last controller), then the one-rule edit made
+    # another way (another constant: a plan shape the solver has not seen,
+    # the same work as the first edit) on top of it.
+    last = text.rindex("<= 1000.0")
+    elsewhere = text[:last] + "<= 998.0" + text[last + len("<= 1000.0"):]
+    check_path(str(path), overlay={real: elsewhere}, memory=memory)
+    again = edit_one_rule(elsewhere, "997.0")
+    t = time.process_time()
+    check_path(str(path), overlay={real: again}, memory=memory)
+    return first, time.process_time() - t
 
 
 def profile(path: Path, top: int) -> str:
@@ -171,6 +189,7 @@ def main(argv: list[str] | None = None) -> int:
     print("-" * len(header))
     results: dict[int, dict] = {}
     breakdown: dict[int, dict] = {}
+    server: dict[int, float] = {}
     with tempfile.TemporaryDirectory(prefix="rcsc-bench-") as tmp:
         paths = {}
         for n in sizes:
@@ -204,9 +223,11 @@ def main(argv: list[str] | None = None) -> int:
                 breakdown[n] = stages(paths[n])
                 parts = "  ".join(f"{k} {v:.2f}" for k, v in breakdown[n].items())
                 print(f"{n:>11}: {parts}  total {sum(breakdown[n].values()):.2f}", flush=True)
-            print("\nlanguage server re-check after one edit (in process, warm guard store; CPU s):")
+            print("\nlanguage server re-check after one edit (in process, what the server keeps in memory; CPU s):")
             for n in sizes:
-                print(f"{n:>11}: {server_edit(paths[n]):.2f}", flush=True)
+                first, later = server_edit(paths[n])
+                server[n] = later
+                print(f"{n:>11}: first edit after a full check {first:.2f}, a later edit {later:.2f}", flush=True)
 
         print()
         if GOAL_CONTROLLERS in results:
@@ -219,6 +240,9 @@ def main(argv: list[str] | None = None) -> int:
                 ratio = cold["cpu"] / results[half]["cold"]["cpu"]
                 print(f"goal t({GOAL_CONTROLLERS})/t({half}) <= {GOAL_RATIO}: {'MET' if ratio <= GOAL_RATIO else 'MISSED'} ({ratio:.2f})")
             print(f"goal re-check after one edit <= {GOAL_EDIT_S} s: {'MET' if r['edit']['cpu'] <= GOAL_EDIT_S else 'MISSED'} ({r['edit']['cpu']:.2f} s CPU, fresh process, warm cache)")
+            if GOAL_CONTROLLERS in server:
+                later = server[GOAL_CONTROLLERS]
+                print(f"goal re-check after one edit <= {GOAL_EDIT_S} s, language server: {'MET' if later <= GOAL_EDIT_S else 'MISSED'} ({later:.2f} s CPU, in process)")
         if args.profile:
             print(f"\ncProfile of one run, {max(sizes)} controllers:\n")
             print(profile(paths[max(sizes)], args.top))

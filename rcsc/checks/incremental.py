@@ -11,10 +11,10 @@ the other controllers again:
    declarations, the CPUs, each controller's outline (header, verbs, status,
    locals, `pre`, `post`) -- must be unchanged, and so must every imported
    file; otherwise the design is checked in full.
-2. The design is parsed and modelled from a copy of the text in which the
-   plan bodies of the unchanged controllers are blanks (every offset, line
-   and column stays where it was), so their plans cost nothing.  The
-   parser must find exactly the plans the scan found.
+2. The design is parsed with the plan bodies of the unchanged controllers
+   read as blanks (holes the tokenizer skips: every offset, line and column
+   stays where it was), so their plans cost nothing.  The parser must find
+   exactly the plans the scan found.
 3. Those controllers' plans in the model are `ElidedPlans`: the check
    families skip them (`model.checked_controllers`), and what other
    controllers' checks read of them -- whether a verb can end in ERROR
@@ -112,7 +112,8 @@ def _remember_outline(path: str, as_module: bool, folder: str | None, result, st
         return
     text = loaded[0].source.text
     found = it.controller_items(text)
-    if found is None or any(f.tree is None for f in loaded):
+    sums = it.digests(text)
+    if found is None or sums is None or any(f.tree is None for f in loaded):
         return
     try:
         summaries = {item.name: controller_summary(design, design.controllers[item.name]) for item in found}
@@ -121,8 +122,8 @@ def _remember_outline(path: str, as_module: bool, folder: str | None, result, st
     value = {
         "format": FORMAT,
         "root": replays._sha(text),
-        "rest": it.digest(it.rest_of(text, found)),
-        "controllers": [[x.name, x.start, x.end, it.digest(x.outline(text)), it.digest(x.body_text(text))] for x in found],
+        "rest": sums[0],
+        "controllers": [[x.name, x.start, x.end, osha, bsha] for x, (osha, bsha) in zip(found, sums[1])],
         "summaries": summaries,
         "values_context": design.values_context,
     }
@@ -207,17 +208,18 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
     if replays._sha(text) == outline["root"]:
         raise _Miss("the root file is unchanged")
     new_items = it.controller_items(text)
-    if new_items is None or it.digest(it.rest_of(text, new_items)) != outline["rest"]:
+    sums = it.digests(text)
+    if new_items is None or sums is None or sums[0] != outline["rest"]:
         raise _Miss("the text outside the controllers changed")
     if [x.name for x in new_items] != [n for n, *_ in old_items]:
         raise _Miss("controllers added, removed or renamed")
     changed: set[str] = set()
     outlines: dict[str, str] = {}
-    for x, (name, _, _, osha, bsha) in zip(new_items, old_items):
-        if it.digest(x.outline(text)) != osha:
+    for x, (name, _, _, osha, bsha), (new_osha, new_bsha) in zip(new_items, old_items, sums[1]):
+        if new_osha != osha:
             raise _Miss("a controller outside its plans changed")
         outlines[name] = osha
-        if it.digest(x.body_text(text)) != bsha:
+        if new_bsha != bsha:
             changed.add(name)
     if not changed:
         raise _Miss("no plan changed")
@@ -226,9 +228,10 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
     elided = [x for x in new_items if x.name not in changed]
     kept = _kept_trees(stores, key, elided, outlines)
     # The parser reads the edited controllers whole, the other controllers
-    # with their plan bodies blank, and nothing of those whose tree is kept.
-    blanked = it.blank(text, [r for x in elided for r in ([(x.start, x.end)] if x.name in kept else [(s, e) for _, s, e in x.bodies])])
-    return _check(path, as_module, stores, overlay, text, blanked, new_items, old_items, elided, changed, summaries, last, values_context,
+    # with their plan bodies as blanks, and nothing of those whose tree is
+    # kept: those are holes in the text, which it reads as blanks.
+    holes = [r for x in elided for r in ([(x.start, x.end)] if x.name in kept else [(s, e) for _, s, e in x.bodies])]
+    return _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, changed, summaries, last, values_context,
                   kept, outlines)
 
 
@@ -328,7 +331,7 @@ def _keep_trees(stores: dict, key: str, trees: dict, elided: list, kept: dict[st
         del designs[next(iter(designs))]
 
 
-def _check(path, as_module, stores, overlay, text, blanked, new_items, old_items, elided, changed, summaries, last, values_context,
+def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, changed, summaries, last, values_context,
            kept, outlines):
     from rcsc.checks import check_model, guards, suppress
     from rcsc.checks.hints import add_hints
@@ -338,7 +341,7 @@ def _check(path, as_module, stores, overlay, text, blanked, new_items, old_items
     from rcsc.semantics.sema import ast_to_model
 
     diags = Diagnostics()
-    loaded = path_to_files(path, diags, as_module, {**overlay, os.path.realpath(path): blanked})
+    loaded = path_to_files(path, diags, as_module, {**overlay, os.path.realpath(path): text}, root_holes=holes)
     if any(f.tree is None for f in loaded) or not loaded[0].is_root:
         raise _Miss("a syntax error")
     if any(isinstance(x, (ast.ControllerType, ast.ControllerInstance)) for f in loaded for x in f.tree.items):
@@ -365,8 +368,6 @@ def _check(path, as_module, stores, overlay, text, blanked, new_items, old_items
             raise _Miss("the parser found other controllers than the scan")
         if [(p.name.name, p.span.end - 1) for p in c.plans] != [(v, e) for v, _, e in x.bodies]:
             raise _Miss("the parser found other plans than the scan")
-    root.text = text  # the real text: same length, same lines (only blanks differed)
-    root._starts = None
     _keep_trees(stores, replays.key_of(path, as_module), trees, elided, kept, outlines)
     elided_names = {x.name for x in elided}
     try:

@@ -22,7 +22,7 @@ import re
 
 from rcsc.diagnostics import Diagnostics
 from rcsc.front import ast
-from rcsc.front.lexer import _TOKEN
+from rcsc.front.lexer import _TOKEN, segments
 from rcsc.front.source import SourceFile, Span
 
 _PIECE = re.compile(r"[ \t\f\r\n]+|//[^\n]*|/\*[\s\S]*?\*/")
@@ -33,13 +33,20 @@ DOCUMENTED = (ast.Const, ast.Enum, ast.Record, ast.Param, ast.GmVar, ast.Functio
               ast.Rule, ast.Plan, ast.Decl, ast.Controller, ast.Cpu)
 
 
-def doc_runs(text: str) -> dict[int, ast.DocComment]:
-    """Each `///` run of `text`, keyed by the offset of the token that follows it."""
+def doc_runs(text: str, holes: list[tuple[int, int]] | None = None) -> dict[int, ast.DocComment]:
+    """Each `///` run of `text` outside `holes` (see `rcsc.front.lexer.tokenize`),
+    keyed by the offset of the token that follows it."""
     out: dict[int, ast.DocComment] = {}
     if "///" not in text:
         return out
-    pos = 0
-    for trivia, tok in _TOKEN.findall(text):
+    for lo, hi in segments(len(text), holes):
+        _doc_runs(text, lo, hi, out)
+    return out
+
+
+def _doc_runs(text: str, lo: int, hi: int, out: dict) -> None:
+    pos = lo
+    for trivia, tok in _TOKEN.findall(text, lo, hi):
         start = pos
         pos += len(trivia) + len(tok)
         if "///" not in trivia:
@@ -60,14 +67,13 @@ def doc_runs(text: str) -> dict[int, ast.DocComment]:
         if lines:
             assert first is not None and last is not None
             out[start + len(trivia)] = (first, last, "\n".join(line.rstrip() for line in lines))  # type: ignore[assignment]
-    return out
 
 
-def attach(tree: ast.File | None, source: SourceFile, diags: Diagnostics) -> None:
-    """Attach the doc comments of `source` to the nodes of `tree`; W0240 for the others."""
+def attach(tree: ast.File | None, source: SourceFile, diags: Diagnostics, holes: list[tuple[int, int]] | None = None) -> None:
+    """Attach the doc comments of `source` (outside `holes`) to the nodes of `tree`; W0240 for the others."""
     if tree is None:
         return
-    runs = doc_runs(source.text)
+    runs = doc_runs(source.text, holes)
     if not runs:
         return
     used: set[int] = set()

@@ -71,41 +71,29 @@ def controller_items(text: str) -> list[ControllerItem] | None:
     return found
 
 
+# What the scan stops at: a string (to its closing quote on the line, or the
+# quote alone when none), a comment (whole; an unclosed block comment to the
+# end), a brace, or a `/` that is a division (passed over).  Everything
+# before it is skipped in one step.
+# The end of the text is a stop too (an empty one): without it, the text
+# after the last stop would be skipped again from each of its characters.
+_STOPS = re.compile(r'[^{}"/]*+("[^"\n]*"|"|//[^\n]*|/\*[\s\S]*?(?:\*/|\Z)|/|[{}]|\Z)')
+
+
 def _scan(text: str) -> list[ControllerItem] | None:
     items: list[ControllerItem] = []
     depth = 0
     current: ControllerItem | None = None
     body: tuple[str, int, int] | None = None  # the plan being read: (verb, body start, its depth)
     last = 0  # the end of the last brace, comment or string: an opener starts after it
-    search = _SPECIAL.search
-    find = text.find
-    pos = 0
-    while True:
-        mt = search(text, pos)
-        if mt is None:
-            break
-        i = mt.start()
-        ch = text[i]
-        if ch == '"':
-            j = find("\n", i + 1)
-            k = find('"', i + 1, len(text) if j < 0 else j)
-            pos = last = (k + 1) if k >= 0 else (i + 1)
-            continue
+    for mt in _STOPS.finditer(text):
+        ch = mt.group(1)
         if ch == "/":
-            nxt = text[i + 1:i + 2]
-            if nxt == "/":
-                j = find("\n", i + 2)
-                pos = len(text) if j < 0 else j
-            elif nxt == "*":
-                j = find("*/", i + 2)
-                pos = len(text) if j < 0 else j + 2
-            else:
-                pos = i + 1  # a division: not a comment
-                continue
-            last = pos
-            continue
-        pos = i + 1
+            continue  # a division: not a comment
+        if not ch:
+            break  # the end
         if ch == "{":
+            i = mt.start(1)
             if depth == 0:
                 mo = _CONTROLLER.search(text, max(last, i - _LOOKBACK), i)
                 if mo is not None:
@@ -115,7 +103,8 @@ def _scan(text: str) -> list[ControllerItem] | None:
                 if mo is not None:
                     body = (mo.group(1), i + 1, depth + 1)
             depth += 1
-        else:
+        elif ch == "}":
+            i = mt.start(1)
             depth -= 1
             if depth < 0:
                 return None
@@ -127,7 +116,7 @@ def _scan(text: str) -> list[ControllerItem] | None:
                 current.end = i + 1
                 items.append(current)
                 current = None
-        last = pos
+        last = mt.end()
     if depth != 0:
         return None
     return items
@@ -135,6 +124,22 @@ def _scan(text: str) -> list[ControllerItem] | None:
 
 def digest(text: str) -> str:
     return hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
+
+
+_digests_memo: list = [None, None]  # the last text digested (the same object) and its digests
+
+
+def digests(text: str) -> tuple[str, list[tuple[str, str]]] | None:
+    """The digest of the rest of `text` (`rest_of`) and, for each controller
+    of `controller_items(text)`, the digests of its outline and of its plan
+    bodies; None when the braces do not balance.  Kept for the last text: a
+    re-check compares them and then stores them."""
+    if _digests_memo[0] is text:
+        return _digests_memo[1]
+    found = controller_items(text)
+    out = None if found is None else (digest(rest_of(text, found)), [(digest(x.outline(text)), digest(x.body_text(text))) for x in found])
+    _digests_memo[0], _digests_memo[1] = text, out
+    return out
 
 
 def rest_of(text: str, items: list[ControllerItem]) -> str:

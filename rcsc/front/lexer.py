@@ -50,27 +50,45 @@ NAME_START = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_")
 DIGITS = frozenset("0123456789")
 
 
-def tokenize(text: str) -> tuple[list[str], list[int], list[int]]:
+def segments(length: int, holes: list[tuple[int, int]] | None) -> list[tuple[int, int]]:
+    """[start, end) of the text of `length` characters outside `holes`
+    (sorted, disjoint [start, end) ranges)."""
+    out, at = [], 0
+    for s, e in holes or ():
+        if s > at:
+            out.append((at, s))
+        at = max(at, e)
+    out.append((at, length))
+    return out
+
+
+def tokenize(text: str, holes: list[tuple[int, int]] | None = None) -> tuple[list[str], list[int], list[int]]:
     """The tokens of `text`, their start and their end offsets, ending with
     EOF at len(text).
 
     Token texts are interned: a design repeats the same few hundred names
     and keywords, and the AST keeps one copy of each instead of one per use.
+
+    `holes` are ranges read as blanks without being looked at (the
+    incremental re-check's unchanged controllers, `rcsc.checks.incremental`):
+    the tokens are those of the text with the holes blanked, a hole must not
+    start or end inside a token, a comment or a string.
     """
     toks: list[str] = []
     starts: list[int] = []
     ends: list[int] = []
-    pos = 0
     append_tok, append_start, append_end = toks.append, starts.append, ends.append
     intern = sys.intern
-    for trivia, tok in _TOKEN.findall(text):
-        if not tok:  # the end
-            break
-        pos += len(trivia)
-        append_tok(intern(tok))
-        append_start(pos)
-        pos += len(tok)
-        append_end(pos)
+    for lo, hi in segments(len(text), holes):
+        pos = lo
+        for trivia, tok in _TOKEN.findall(text, lo, hi):
+            if not tok:  # the end
+                break
+            pos += len(trivia)
+            append_tok(intern(tok))
+            append_start(pos)
+            pos += len(tok)
+            append_end(pos)
     # Every match starts where the previous one ended (a token can be any
     # character, and the end matches too), so the offsets above are exact.
     append_tok(EOF)

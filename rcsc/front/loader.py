@@ -59,14 +59,17 @@ def stdlib_path(module: str):
 
 
 def path_to_files(
-    path: str, diags: Diagnostics, as_module: bool = False, overlay: dict[str, str] | None = None
+    path: str, diags: Diagnostics, as_module: bool = False, overlay: dict[str, str] | None = None,
+    root_holes: list[tuple[int, int]] | None = None,
 ) -> list[LoadedFile]:
     """Read and parse the root design file and, transitively, its imports.
 
     With `as_module`, the root may also be a `module` (checked on its own,
     as `rcsc check` does for a module that no design imports).  `overlay`
     maps real paths to texts that replace the files' contents (the unsaved
-    documents of an editor, for the language server)."""
+    documents of an editor, for the language server).  `root_holes`: ranges
+    of the root text that the parser reads as blanks (see
+    `rcsc.front.parse.text_to_ast`)."""
     overlay = overlay or {}
     try:
         text = overlay.get(os.path.realpath(path))
@@ -86,7 +89,7 @@ def path_to_files(
 
     def visit(source: SourceFile, real: str, is_root: bool, display_dir: str | None) -> None:
         seen.add(real)
-        tree = text_to_ast(source, diags)
+        tree = text_to_ast(source, diags, root_holes if is_root else None)
         module = ""
         if tree is not None:
             module = tree.name.name if tree.name is not None and tree.kind == "module" else ""

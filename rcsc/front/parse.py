@@ -114,18 +114,25 @@ def literal_fraction(text: str) -> Fraction:
 _BIDI_CONTROLS = re.compile("[\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069]")
 
 
-def text_to_ast(source: SourceFile, diags: Diagnostics) -> ast.File | None:
-    """Parse one file.  Returns None (with a diagnostic) on a syntax error."""
+def text_to_ast(source: SourceFile, diags: Diagnostics, holes: list[tuple[int, int]] | None = None) -> ast.File | None:
+    """Parse one file.  Returns None (with a diagnostic) on a syntax error.
+
+    `holes` (the incremental re-check's unchanged controllers and plan
+    bodies) are read as blanks without being looked at; the file is then
+    parsed by the fast parser only, and None without a diagnostic means that
+    it could not (the caller checks the design in full)."""
     if os.environ.get("RCSC_PARSER") != "lark" and not _BIDI_CONTROLS.search(source.text):
         from rcsc.front.rdparse import Fallback, parse_fast
 
         try:
-            tree, found = parse_fast(source)
+            tree, found = parse_fast(source, holes)
         except Fallback:
             pass
         else:
             diags.extend(found)
             return tree
+    if holes:
+        return None
     return text_to_ast_lark(source, diags)
 
 

@@ -74,10 +74,10 @@ _EXPR_KEYWORDS = frozenset(("if", "not", "true", "false"))
 
 
 class _Parser:
-    def __init__(self, source: SourceFile, diags: Diagnostics) -> None:
+    def __init__(self, source: SourceFile, diags: Diagnostics, holes: list[tuple[int, int]] | None = None) -> None:
         self.src = source
         self.diags = diags
-        self.toks, self.starts, self.ends = tokenize(source.text)
+        self.toks, self.starts, self.ends = tokenize(source.text, holes)
         self.i = 0
         self.recursion = 0
         self.too_deep = False
@@ -936,11 +936,12 @@ _CPU_ITEMS = {
 }
 
 
-def parse_fast(source: SourceFile) -> tuple[ast.File | None, Diagnostics]:
+def parse_fast(source: SourceFile, holes: list[tuple[int, int]] | None = None) -> tuple[ast.File | None, Diagnostics]:
     """Parse `source`: (tree or None after E0007, findings of literals and
-    nesting).  Raises Fallback where the reference parser must answer."""
+    nesting).  Raises Fallback where the reference parser must answer.
+    `holes`: ranges read as blanks (see `rcsc.front.lexer.tokenize`)."""
     diags = Diagnostics()
-    parser = _Parser(source, diags)
+    parser = _Parser(source, diags, holes)
     try:
         tree = parser.file()
     except (RecursionError, IndexError) as exc:
@@ -949,5 +950,5 @@ def parse_fast(source: SourceFile) -> tuple[ast.File | None, Diagnostics]:
         return None, diags
     from rcsc.front.doccomment import attach
 
-    attach(tree, source, diags)
+    attach(tree, source, diags, holes)
     return tree, diags
