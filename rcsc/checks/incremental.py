@@ -92,7 +92,12 @@ def stores_in(folder: str) -> dict:
 
 def memory_stores(solver_store: cache.MemoryStore) -> dict:
     """Stores in memory, for a long-lived process (the language server); the
-    solver's analyses in `solver_store`, which the process keeps anyway."""
+    solver's analyses in `solver_store`, which the process keeps anyway.
+
+    A check made with them holds the kept syntax trees of the unchanged
+    controllers (`_KeptTree`), whose spans the next re-check of the same
+    design moves: use a result before checking that design again (the
+    language server publishes the findings at once)."""
     return {NAMESPACE: cache.MemoryStore(limit=64), replays.NAMESPACE: cache.MemoryStore(limit=64), "guards": solver_store,
             "values": solver_store, TREES: {}}
 
