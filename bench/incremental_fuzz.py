@@ -224,12 +224,26 @@ def places(result) -> list:
     return sorted((d.code, str(d.severity), at(d.span), [at(lab.span) for lab in d.labels]) for d in result.diags.items)
 
 
-def run_seed_in_memory(seed: int, work: Path, edits: int = 6) -> dict:
+def edit_between(text: str, rng: random.Random) -> tuple[str, list[str]] | None:
+    """The text with a doc comment, a plain comment or blank lines written
+    before a random controller (outside every plan: the next check is a
+    full one, and what it keeps must not outlive it)."""
+    found = it.controller_items(text)
+    if not found:
+        return None
+    x = rng.choice(found)
+    kind = rng.choice(("doc", "blank", "comment"))
+    written = {"doc": "/// documented\n", "blank": "\n\n", "comment": "// plain\n"}[kind]
+    return text[:x.start] + written + text[x.start:], [f"{kind} before {x.name}"]
+
+
+def run_seed_in_memory(seed: int, work: Path, edits: int = 8) -> dict:
     """The language server's way (`--memory`): one process keeps the last
     check, the solver's answers and the unchanged controllers' syntax trees
     in memory (`incremental.memory_stores`); `edits` successive random edits
-    of the seed's design are each re-checked that way and compared, place
-    for place, with a full check of the same text."""
+    of the seed's design (mostly inside plans, sometimes before a
+    controller) are each re-checked that way and compared, place for place,
+    with a full check of the same text."""
     import random
 
     from rcsc.checks import cache, incremental
@@ -247,7 +261,7 @@ def run_seed_in_memory(seed: int, work: Path, edits: int = 6) -> dict:
     used = kept = 0
     done: list[str] = []
     for _ in range(edits):
-        edited = edit(text, rng)
+        edited = edit_between(text, rng) if rng.random() < 0.25 else edit(text, rng)
         if edited is None:
             break
         text = edited[0]

@@ -231,13 +231,13 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
     if any(x.name not in summaries for x in new_items):
         raise _Miss("a corrupt entry")
     elided = [x for x in new_items if x.name not in changed]
-    kept = _kept_trees(stores, key, elided, outlines)
+    kept = _kept_trees(stores, key, elided, outlines, sums[0])
     # The parser reads the edited controllers whole, the other controllers
     # with their plan bodies as blanks, and nothing of those whose tree is
     # kept: those are holes in the text, which it reads as blanks.
     holes = [r for x in elided for r in ([(x.start, x.end)] if x.name in kept else [(s, e) for _, s, e in x.bodies])]
     return _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, changed, summaries, last, values_context,
-                  kept, outlines)
+                  kept, outlines, sums[0])
 
 
 # ---- syntax trees kept between re-checks (a long-lived process) -----------------------------
@@ -247,8 +247,9 @@ class _KeptTree:
     """The syntax tree of one controller as the parser built it from the
     controller's text with its plan bodies blank, and every span in it.
 
-    Such a tree depends only on the controller's outline and on the length
-    of each plan body (`key`): when both are as they were, the tree is the
+    Such a tree depends only on the controller's outline, on the length of
+    each plan body and on the doc comment before it (in the text outside
+    the controllers): when all are as they were (`key`), the tree is the
     one the parser would build again, but at another offset if the text
     before the controller changed length.  Moving it there means adding
     that difference to each of its spans, which is much cheaper than
@@ -275,13 +276,17 @@ class _KeptTree:
         self.start = start
 
 
-def _tree_key(x: it.ControllerItem, outline_sha: str) -> tuple:
-    return (outline_sha, tuple(e - s for _, s, e in x.bodies))
+def _tree_key(x: it.ControllerItem, outline_sha: str, rest_sha: str) -> tuple:
+    # The text outside the controllers belongs to the key too: a doc comment
+    # written before the controller since its tree was kept (checked in
+    # full then) documents the controller, which a kept tree would not know.
+    return (rest_sha, outline_sha, tuple(e - s for _, s, e in x.bodies))
 
 
-def _kept_trees(stores: dict, key: str, elided: list, outlines: dict[str, str]) -> dict[str, _KeptTree]:
+def _kept_trees(stores: dict, key: str, elided: list, outlines: dict[str, str], rest_sha: str) -> dict[str, _KeptTree]:
     """The kept trees of the elided controllers `elided` that are still
-    their trees (same outline, same plan body lengths)."""
+    their trees (same outline, same plan body lengths, same text around the
+    controllers)."""
     designs = stores.get(TREES)
     found = designs.get(key) if designs is not None else None
     if not found:
@@ -289,7 +294,7 @@ def _kept_trees(stores: dict, key: str, elided: list, outlines: dict[str, str]) 
     out = {}
     for x in elided:
         k = found.get(x.name)
-        if k is not None and k.key == _tree_key(x, outlines[x.name]):
+        if k is not None and k.key == _tree_key(x, outlines[x.name], rest_sha):
             out[x.name] = k
     return out
 
@@ -321,7 +326,8 @@ def _spans_of(node) -> list[Span]:
     return out
 
 
-def _keep_trees(stores: dict, key: str, trees: dict, elided: list, kept: dict[str, _KeptTree], outlines: dict[str, str]) -> None:
+def _keep_trees(stores: dict, key: str, trees: dict, elided: list, kept: dict[str, _KeptTree], outlines: dict[str, str],
+                rest_sha: str) -> None:
     designs = stores.get(TREES)
     if designs is None:
         return
@@ -330,14 +336,14 @@ def _keep_trees(stores: dict, key: str, trees: dict, elided: list, kept: dict[st
         if x.name not in kept and x.name in trees:
             tree = trees[x.name]
             if tree.doc is None:  # a doc comment lies before the controller: blanking it would orphan it
-                found[x.name] = _KeptTree(_tree_key(x, outlines[x.name]), x.start, tree, _spans_of(tree))
+                found[x.name] = _KeptTree(_tree_key(x, outlines[x.name], rest_sha), x.start, tree, _spans_of(tree))
     designs[key] = found
     while len(designs) > _KEPT_DESIGNS:
         del designs[next(iter(designs))]
 
 
 def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, changed, summaries, last, values_context,
-           kept, outlines):
+           kept, outlines, rest_sha):
     from rcsc.checks import check_model, guards, suppress
     from rcsc.checks.hints import add_hints
     from rcsc.front import ast
@@ -373,7 +379,7 @@ def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, 
             raise _Miss("the parser found other controllers than the scan")
         if [(p.name.name, p.span.end - 1) for p in c.plans] != [(v, e) for v, _, e in x.bodies]:
             raise _Miss("the parser found other plans than the scan")
-    _keep_trees(stores, replays.key_of(path, as_module), trees, elided, kept, outlines)
+    _keep_trees(stores, replays.key_of(path, as_module), trees, elided, kept, outlines, rest_sha)
     elided_names = {x.name for x in elided}
     try:
         design = ast_to_model(loaded, diags, elided_plans={name: summaries[name] for name in elided_names})
