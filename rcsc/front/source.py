@@ -84,7 +84,9 @@ class SourceFile:
 class Span:
     """A half-open character range [start, end) of a source file.
 
-    Treated as immutable.  A plain class with slots rather than a frozen
+    Treated as immutable, with one exception: a language server's re-check
+    moves the spans of the syntax trees it keeps between re-checks to
+    their new offsets (`rcsc.checks.incremental._KeptTree`).  A plain class with slots rather than a frozen
     dataclass: a large design has millions of spans, and a frozen
     dataclass's constructor is several times slower and its instances
     larger.
