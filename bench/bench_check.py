@@ -87,11 +87,12 @@ def run_command(path: Path, *extra: str, incremental: bool = True) -> dict:
     return {"cpu": usage.ru_utime + usage.ru_stime, "wall": wall, "rss": rss, "rc": proc.returncode}
 
 
-def edit_one_rule(text: str, to: str = "999.0") -> str:
-    """The design with the first `<= 1000.0` of controller C0's guards changed (one rule of one controller)."""
-    start = text.index("controller C0 ")
-    i = text.index("<= 1000.0", start)
-    return text[:i] + "<= " + to + text[i + len("<= 1000.0"):]
+def edit_one_rule(text: str, to: str = "999.0", controller: str = "C0") -> str:
+    """The design with the first `<= 1000.0` of `controller`'s guards changed
+    to `<= to` (one rule of one controller); unchanged when it has none left."""
+    start = text.index(f"controller {controller} ")
+    i = text.find("<= 1000.0", start)
+    return text if i < 0 else text[:i] + "<= " + to + text[i + len("<= 1000.0"):]
 
 
 def stages(path: Path) -> dict[str, float]:
@@ -146,11 +147,10 @@ def server_edit(path: Path, later_edits: int = 5) -> tuple[float, float]:
     names = re.findall(r"^controller (\w+) ", text, re.M)
     later = []
     for k in range(later_edits):
-        name = names[(0, len(names) - 1, len(names) // 2)[k % 3]]
-        at = text.find("<= 1000.0", text.index(f"controller {name} "))
-        if at < 0:
+        edited = edit_one_rule(text, f"{990 - k}.0", names[(0, len(names) - 1, len(names) // 2)[k % 3]])
+        if edited == text:
             break
-        text = text[:at] + f"<= {990 - k}.0" + text[at + len("<= 1000.0"):]
+        text = edited
         t = time.process_time()
         check_path(str(path), overlay={real: text}, memory=memory)
         later.append(time.process_time() - t)
