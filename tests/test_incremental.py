@@ -20,6 +20,8 @@ import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from rcsc.checks import incremental
 from rcsc.diagnostics import Diagnostics
@@ -78,6 +80,60 @@ def test_the_scan_is_not_fooled_by_comments_strings_and_names() -> None:
     blanked = it.blank(text, [(s, e)])
     assert len(blanked) == len(text) and blanked.count("\n") == text.count("\n") and "R1" not in blanked
     assert it.controller_items("controller A { plan B {") is None  # unbalanced: no guess
+
+
+# Pieces that matter to the scan: braces, strings, comments, divisions,
+# line breaks and the words that open controllers and plans.
+_PIECES = ["{", "}", '"', "/", "*", "\n", " ", "x", "//", "/*", "*/", "a = 1 / 2", "controller C1 ", "controller X level 2 ",
+           " budget 10 us ", "plan p ", "plan q ordered ", '"}"']
+
+
+def _design_text(n: int, plans: int) -> str:
+    out = []
+    for k in range(n):
+        out.append(["", "// c\n", "/* x */", "gm a: f64 = 1.0 / 2.0\n", '/// "doc\n'][k % 5])
+        out.append(f"controller C{k} level {k} {{\n")
+        for j in range((k + plans) % 5):
+            out.append(f'  plan P{j} {{ a: {{ x }} "s}}" // }}\n }}\n')
+        out.append("}\n")
+    return "".join(out)
+
+
+def _as_found(items):
+    return None if items is None else [(x.name, x.start, x.end, x.bodies, x.scan_from) for x in items]
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(st.integers(0, 6), st.integers(0, 4),
+       st.lists(st.tuples(st.floats(0, 1), st.integers(0, 8), st.lists(st.sampled_from(_PIECES), max_size=4)), min_size=1, max_size=8))
+def test_the_scan_after_an_edit_finds_what_a_whole_scan_finds(n, plans, edits) -> None:
+    """A language server scans text after text, each an edit of the one
+    before; the scan then reads only the controllers around the edit
+    (`items._rescan`) and must find what scanning the whole text finds, and
+    `digests` must give what digesting it whole gives."""
+    it._memo[:] = [None, None, None, None]
+    text = _design_text(n, plans)
+    it.digests(text)
+    for where, length, pieces in edits:
+        at = int(where * len(text))
+        text = text[:at] + "".join(pieces) + text[at + length:]
+        found = it.controller_items(text)
+        whole = it._scan(text)
+        assert _as_found(found) == _as_found(whole), text
+        sums = it.digests(text)
+        assert sums == (None if whole is None else (it.digest(it.rest_of(text, whole)),
+                                                    [(it.digest(x.outline(text)), it.digest(x.body_text(text))) for x in whole]))
+
+
+def test_the_scan_after_an_edit_reads_only_the_edited_controller() -> None:
+    text = _design_text(40, 3)
+    it._memo[:] = [None, None, None, None]
+    it.controller_items(text)
+    at = text.index("a: { x }", text.index("controller C20 "))
+    edited = text[:at] + "b" + text[at + 1:]
+    found = it.controller_items(edited)
+    assert it._memo[2] is not None and it._memo[2].count(None) == 1  # C20 alone was scanned again
+    assert _as_found(found) == _as_found(it._scan(edited))
 
 
 def _edit(path: Path, old: str, new: str, after: str = "") -> None:

@@ -38,8 +38,18 @@ FORMAT = 1
 _UNSTORABLE_CODES = frozenset(("E0003",))
 
 
+# The last texts digested (the same objects) and their digests: a re-check
+# digests its root text when it compares, and again when it stores.
+_sha_memo: list[tuple[str, str]] = []
+
+
 def _sha(text: str) -> str:
-    return hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
+    for seen, sha in _sha_memo:
+        if seen is text:
+            return sha
+    sha = hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
+    _sha_memo[:] = [(text, sha)] + _sha_memo[:1]
+    return sha
 
 
 def key_of(path: str, as_module: bool) -> str:

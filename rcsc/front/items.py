@@ -45,6 +45,15 @@ class ControllerItem:
     start: int
     end: int
     bodies: list[tuple[str, int, int]] = field(default_factory=list)  # (verb, start, end)
+    # Where the scan was when it met the controller's `{`: the end of the
+    # last brace, comment or string before it.  A scan started there (at the
+    # top level) reads the rest of the text exactly as the whole scan did.
+    scan_from: int = 0
+
+    def moved(self, delta: int) -> "ControllerItem":
+        """The same controller `delta` characters further on."""
+        return ControllerItem(self.name, self.start + delta, self.end + delta,
+                              [(v, s + delta, e + delta) for v, s, e in self.bodies], self.scan_from + delta)
 
     def outline(self, text: str) -> str:
         """The controller's text without its plan bodies: what other controllers can see of it."""
@@ -59,16 +68,103 @@ class ControllerItem:
         return "\x00".join(text[s:e] for _, s, e in self.bodies)
 
 
-_memo: list = [None, None]  # the last text scanned (the same object) and its result
+# The last text scanned (the same object), its controllers, for each of them
+# the index of the same controller in the text scanned before it (or None
+# when it was scanned anew; no list when the whole text was scanned), and
+# that text: `digests` reuses what did not change.
+_memo: list = [None, None, None, None]
 
 
 def controller_items(text: str) -> list[ControllerItem] | None:
     """The controllers of `text` in order, or None when the braces do not balance."""
     if _memo[0] is text:
         return _memo[1]
-    found = _scan(text)
-    _memo[0], _memo[1] = text, found
+    origin = None
+    found = None
+    if _memo[0] is not None and _memo[1] is not None:
+        # A language server checks text after text, each a small edit of
+        # the one before: only the controllers the edit lies in are
+        # scanned again.
+        again = _rescan(_memo[0], _memo[1], text)
+        if again is not None:
+            found, origin = again
+    if found is None:
+        found = _scan(text)
+    _memo[:] = [text, found, origin, _memo[0] if origin is not None else None]
     return found
+
+
+def _edit(old: str, new: str) -> tuple[int, int, int]:
+    """(p, old_end, new_end): `old[p:old_end]` became `new[p:new_end]`, the
+    text before and after the same (the longest common prefix, then the
+    longest common suffix of what remains)."""
+    n = min(len(old), len(new))
+    step = 1 << 14
+    p = 0
+    while p < n and old[p:p + step] == new[p:p + step]:
+        p += step
+    hi = min(p + step, n)
+    while p < hi:  # old[:p] == new[:p] and they differ before hi (or hi == n)
+        mid = (p + hi + 1) // 2
+        if old[p:mid] == new[p:mid]:
+            p = mid
+        else:
+            hi = mid - 1
+    limit = n - p  # the suffix must not overlap the prefix
+    s = 0
+    lo, ln = len(old), len(new)
+    while s < limit:
+        k = min(step, limit - s)
+        if old[lo - s - k:lo - s] != new[ln - s - k:ln - s]:
+            break
+        s += k
+    else:
+        return p, lo - s, ln - s
+    hi = min(s + step, limit)
+    while s < hi:
+        mid = (s + hi + 1) // 2
+        if old[lo - mid:lo - s] == new[ln - mid:ln - s]:
+            s = mid
+        else:
+            hi = mid - 1
+    return p, lo - s, ln - s
+
+
+def _rescan(old: str, old_items: list[ControllerItem], new: str) -> tuple[list[ControllerItem], list[int | None]] | None:
+    """The controllers of `new`, an edit of `old` whose controllers are
+    `old_items`, found by scanning only from the last controller that opens
+    before the edit to the first that closes after it; None when that
+    stretch does not end as it did (the rest must then be scanned too)."""
+    p, old_end, new_end = _edit(old, new)
+    delta = new_end - old_end
+    # The stretch starts at the top level, where the whole scan stood before
+    # the controller the edit lies in: before its `{` (`scan_from`) when the
+    # edit starts after the end of that line (what the scan read up to then
+    # depends on nothing after it: a comment runs to the end of its line,
+    # and a `"` is a string when its line closes it), else after the `}` of
+    # the controller before it (a brace depends on nothing after it).
+    first = 0
+    while first < len(old_items) and old_items[first].end <= p:
+        first += 1
+    after_previous = old_items[first - 1].end if first > 0 else 0
+    first_start = after_previous
+    if first < len(old_items):
+        line_end = old.find("\n", old_items[first].scan_from)
+        if 0 <= line_end < p:
+            first_start = old_items[first].scan_from
+    last = first
+    while last < len(old_items) and old_items[last].end < old_end:
+        last += 1
+    stop = old_items[last].end + delta if last < len(old_items) else None  # None: to the end
+    if first_start > p or (stop is not None and stop < new_end):
+        return None
+    middle = _scan(new, first_start, stop)
+    if middle is None:
+        return None
+    tail = [x.moved(delta) for x in old_items[last + 1:]]
+    found = old_items[:first] + middle + tail
+    origin: list[int | None] = list(range(first)) + [None] * len(middle) + list(range(last + 1, len(old_items)))
+    return found, origin
 
 
 # What the scan stops at: a string (to its closing quote on the line, or the
@@ -80,15 +176,26 @@ def controller_items(text: str) -> list[ControllerItem] | None:
 _STOPS = re.compile(r'[^{}"/]*+("[^"\n]*"|"|//[^\n]*|/\*[\s\S]*?(?:\*/|\Z)|/|[{}]|\Z)')
 
 
-def _scan(text: str) -> list[ControllerItem] | None:
+def _scan(text: str, start: int = 0, stop: int | None = None) -> list[ControllerItem] | None:
+    """The controllers of `text`, or with `stop` of `text[start:stop]`:
+    read from `start` at the top level, where the whole scan stood after a
+    brace, comment or string; None when the braces do not balance, or when
+    the stretch does not end, at the top level, with a `}` that ends at
+    `stop` (it then does not end where the whole scan would be in the same
+    state again).  The text after `stop` is read as the whole scan reads it
+    (a string or comment that runs past `stop` is one), so a stretch that
+    succeeds finds what the whole scan finds there."""
     items: list[ControllerItem] = []
     depth = 0
     current: ControllerItem | None = None
     body: tuple[str, int, int] | None = None  # the plan being read: (verb, body start, its depth)
-    last = 0  # the end of the last brace, comment or string: an opener starts after it
-    for mt in _STOPS.finditer(text):
+    last = start  # the end of the last brace, comment or string: an opener starts after it
+    for mt in _STOPS.finditer(text, start):
         ch = mt.group(1)
-        if ch == "/":
+        if stop is not None and mt.end() >= stop:
+            if ch != "}" or mt.end() != stop or depth != 1:
+                return None
+        elif ch == "/":
             continue  # a division: not a comment
         if not ch:
             break  # the end
@@ -97,7 +204,7 @@ def _scan(text: str) -> list[ControllerItem] | None:
             if depth == 0:
                 mo = _CONTROLLER.search(text, max(last, i - _LOOKBACK), i)
                 if mo is not None:
-                    current = ControllerItem(mo.group(1), mo.start() + (mo.group(0)[0] not in "cs"), -1)
+                    current = ControllerItem(mo.group(1), mo.start() + (mo.group(0)[0] not in "cs"), -1, scan_from=last)
             elif depth == 1 and current is not None and body is None:
                 mo = _PLAN.search(text, max(last, i - _LOOKBACK), i)
                 if mo is not None:
@@ -117,7 +224,9 @@ def _scan(text: str) -> list[ControllerItem] | None:
                 items.append(current)
                 current = None
         last = mt.end()
-    if depth != 0:
+        if stop is not None and last == stop:
+            return items
+    if depth != 0 or stop is not None:
         return None
     return items
 
@@ -137,7 +246,16 @@ def digests(text: str) -> tuple[str, list[tuple[str, str]]] | None:
     if _digests_memo[0] is text:
         return _digests_memo[1]
     found = controller_items(text)
-    out = None if found is None else (digest(rest_of(text, found)), [(digest(x.outline(text)), digest(x.body_text(text))) for x in found])
+    out = None
+    if found is not None:
+        before = _digests_memo[1] if _memo[0] is text and _memo[3] is not None and _digests_memo[0] is _memo[3] else None
+        origin = _memo[2] if before is not None else None
+        sums = []
+        for i, x in enumerate(found):
+            j = origin[i] if origin is not None else None
+            # A controller the last scan did not read again has the text it had.
+            sums.append(before[1][j] if j is not None else (digest(x.outline(text)), digest(x.body_text(text))))  # type: ignore[index]
+        out = (digest(rest_of(text, found)), sums)
     _digests_memo[0], _digests_memo[1] = text, out
     return out
 
