@@ -1,5 +1,5 @@
-"""`python -m rcsc` runs the command-line interface."""
+"""`python -m rcsc` runs the command-line interface (`rcsc.launch`)."""
 
-from rcsc.cli import entry
+from rcsc.launch import entry
 
 entry()

@@ -122,6 +122,39 @@ def _load_driver() -> ModuleType:
     return driver
 
 
+# In the check daemon (`rcsc.daemon`): what it keeps in memory between calls
+# (`incremental.memory_stores`), put in front of each design's cache folder.
+DAEMON_MEMORY: dict | None = None
+# How the daemon answered each design of the running call: "replay", "partial" or "full".
+DAEMON_ANSWERS: list[str] = []
+
+
+def _check_in_daemon(path: str, as_module: bool):
+    """`_check` with the daemon's memory: the findings of an unchanged design
+    replayed, else the edited controllers re-checked with the syntax trees
+    kept of the others, else a full check; every entry also read from and
+    written to the design's cache folder, as `rcsc check` does."""
+    from rcsc.checks import cache, incremental
+    from rcsc.checks import replay as replays
+
+    assert DAEMON_MEMORY is not None
+    where = cache.folder_for(path)
+    stores = {ns: cache.LayeredStore(DAEMON_MEMORY[ns], cache.Store(where, ns))
+              for ns in (incremental.NAMESPACE, replays.NAMESPACE, "guards", "values")}
+    stores[incremental.TREES] = DAEMON_MEMORY[incremental.TREES]
+    hit = replays.lookup(path, as_module, where, store=stores[replays.NAMESPACE])
+    if hit is not None:
+        DAEMON_ANSWERS.append("replay")
+        return hit
+    driver = _load_driver()
+    try:
+        result = driver.check_path(path, as_module=as_module, memory=stores)
+    except driver.InputError as exc:
+        raise UsageError(str(exc)) from exc
+    DAEMON_ANSWERS.append("partial" if result.partial else "full")
+    return result
+
+
 def _check(path: str, as_module: bool = False, cache: bool = True, replay: bool = False):
     """Run the front end on `path`; an unreadable root file is a usage error (exit 2).
 
@@ -132,6 +165,11 @@ def _check(path: str, as_module: bool = False, cache: bool = True, replay: bool 
     stored there answers with that check's findings (`rcsc.checks.replay`:
     findings only, no model, so only for `rcsc check`).
     """
+    if cache and replay and DAEMON_MEMORY is not None:
+        from rcsc.checks.cache import disabled_by_environment
+
+        if not disabled_by_environment():
+            return _check_in_daemon(path, as_module)
     if cache and replay:
         from rcsc.checks import replay as replays
         from rcsc.checks.cache import folder_for
@@ -172,6 +210,11 @@ def _add_check_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--no-cache", action="store_true",
         help="do not read or write the cache of solver results and findings (.rcsc-cache/ next to the design; also RCSC_NO_CACHE=1)",
+    )
+    p.add_argument(
+        "--daemon", action="store_true",
+        help="have the check daemon answer (started on first use, it stays and keeps the last check in memory: "
+             "a re-check after an edit in a large design takes a fraction of the time; `rcsc daemon --help`)",
     )
     _add_report_arguments(p)
     p.add_argument("-q", "--quiet", action="store_true", help="print the findings only: no summary line, no notes")
@@ -295,6 +338,13 @@ class _CheckRun:
 
 def _run_check(args: argparse.Namespace) -> int:
     from rcsc.front import workspace
+
+    if args.daemon and DAEMON_MEMORY is None:
+        from rcsc import daemon  # (`rcsc.launch` hands such a call on before this module loads)
+
+        code = daemon.client_main(_ARGV)
+        if code is not None:
+            return code
 
     run = _CheckRun(args)
     expanded = workspace.expand(args.paths)
@@ -896,6 +946,36 @@ def _run_lsp(args: argparse.Namespace) -> int:
 
 
 # ---------------------------------------------------------------------------
+# rcsc daemon
+# ---------------------------------------------------------------------------
+
+def _add_daemon_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("action", choices=("status", "stop", "serve"),
+                   help="status: is one running; stop: make it exit; serve: be the daemon (what `rcsc check --daemon` starts)")
+    p.add_argument("--socket", metavar="PATH", help=argparse.SUPPRESS)
+
+
+def _run_daemon(args: argparse.Namespace) -> int:
+    from rcsc import daemon
+
+    try:
+        if args.action == "serve":
+            return daemon.serve(args.socket or daemon.socket_path())
+        if args.action == "stop":
+            _write(sys.stdout, "stopped the check daemon\n" if daemon.stop() else "no check daemon was running\n")
+            return EXIT_OK
+        found = daemon.status()
+    except (daemon.DaemonError, OSError) as exc:
+        raise UsageError(str(exc)) from exc
+    if found is None:
+        _write(sys.stdout, f"no check daemon is running (it would listen on {daemon.socket_path()})\n")
+        return EXIT_OK
+    _write(sys.stdout, f"the check daemon runs as process {found.get('pid')} on {found.get('socket')}: {found.get('calls')} checks "
+                       f"answered, exits after {found.get('idle_s'):g} s without one\n")
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------
 # rcsc completion
 # ---------------------------------------------------------------------------
 
@@ -934,6 +1014,7 @@ COMMANDS: dict[str, Command] = {
     "build": Command("generate code for a target (`rcsc targets`) after every check passes", _add_build_arguments, _run_build),
     "targets": Command("list the code-generation targets", _add_targets_arguments, _run_targets),
     "fmt": Command("format design files: state tables in aligned columns, comments kept", _add_fmt_arguments, _run_fmt),
+    "daemon": Command("the check daemon that answers `rcsc check --daemon` (status, stop)", _add_daemon_arguments, _run_daemon),
     "lsp": Command("run the language server on stdin/stdout (needs `pip install 'rcsc[lsp]'`)", _add_lsp_arguments, _run_lsp),
     "completion": Command("print a shell completion script (bash, zsh or fish)", _add_completion_arguments, _run_completion),
 }
@@ -983,9 +1064,15 @@ def _silence_stdout() -> None:
         return  # stdout is not a real file (tests capture it): nothing to flush
 
 
+# The arguments of the running command (`rcsc check --daemon` hands them on).
+_ARGV: list[str] = []
+
+
 def _main(argv: list[str] | None) -> int:
+    global _ARGV
     if argv is None:
         argv = sys.argv[1:]
+    _ARGV = list(argv)
     command = _command_in(argv)
     # Without a known command word argparse only prints usage or the version.
     args = build_parser(command or "").parse_args(argv)

@@ -71,7 +71,7 @@ def check_path(
 
         result = incremental.recheck(path, as_module, None, stores=memory, overlay=overlay)
         if result is None:
-            result = _check_path(path, as_module, overlay, None, keep_plans, memory["guards"])
+            result = _check_path(path, as_module, overlay, None, keep_plans, memory["guards"], memory["values"])
         incremental.remember(path, as_module, None, result, stores=memory)
         return result
     finally:
@@ -81,7 +81,7 @@ def check_path(
 
 
 def _check_path(path: str, as_module: bool, overlay: dict[str, str] | None, cache_dir: str | None, keep_plans: bool = True,
-                guard_store: cache.MemoryStore | None = None) -> CheckResult:
+                guard_store=None, value_store=None) -> CheckResult:
     diags = Diagnostics()
     files = path_to_files(path, diags, as_module, overlay)
     if any(f.tree is None for f in files):
@@ -90,7 +90,9 @@ def _check_path(path: str, as_module: bool, overlay: dict[str, str] | None, cach
         add_hints(diags, None)
         return CheckResult(diags, None, files)
     design = ast_to_model(files, diags, release_plans=not keep_plans)
-    store = value_store = guard_store  # a MemoryStore holds both analyses
+    store = guard_store
+    if value_store is None:
+        value_store = guard_store  # a MemoryStore holds both analyses
     if store is None and cache_dir is not None and not cache.disabled_by_environment():
         store = cache.Store(cache_dir, "guards")
         value_store = cache.Store(cache_dir, "values")

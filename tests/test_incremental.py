@@ -136,6 +136,33 @@ def test_the_scan_after_an_edit_reads_only_the_edited_controller() -> None:
     assert _as_found(found) == _as_found(it._scan(edited))
 
 
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(st.integers(0, 1000), st.lists(st.tuples(st.floats(0, 1), st.integers(0, 40), st.lists(st.sampled_from(["\n", "a", "\n\n", "bc"]), max_size=6)),
+                                      min_size=1, max_size=6))
+def test_the_line_table_after_an_edit_is_the_line_table(seed, edits) -> None:
+    """The line table of a large text that is an edit of the last one is made
+    from the last one's (`source._line_starts_of`); it must be the table."""
+    import itertools
+    import random
+
+    from rcsc.front import source
+
+    def table(t: str) -> list[int]:
+        return [0, *itertools.accumulate(map((1).__add__, map(len, t.split("\n")[:-1])))]
+
+    r = random.Random(seed)
+    text = "".join(r.choice(["ab", "\n", "x\n\n", "yyyy"]) for _ in range(40_000))
+    assert len(text) > source._REUSE_ABOVE
+    source._last_lines[:] = [None, None]
+    assert SourceFile("a.rcs", text)._line_starts == table(text)
+    for where, length, pieces in edits:
+        at = int(where * len(text))
+        text = text[:at] + "".join(pieces) + text[at + length:]
+        before = source._last_lines[1]
+        assert SourceFile("a.rcs", text)._line_starts == table(text)
+        assert source._last_lines[0] is not None and source._last_lines[1] is not before
+
+
 def _edit(path: Path, old: str, new: str, after: str = "") -> None:
     text = path.read_text(encoding="utf-8")
     at = text.index(old, text.index(after) if after else 0)

@@ -166,11 +166,38 @@ class MemoryStore:
             json.dumps(value, allow_nan=False)
         except (ValueError, TypeError):
             return
+        self.keep(key, value)
+
+    def keep(self, key: str, value) -> None:
+        """`put` a value known to be JSON data (the disk store just took it)."""
         self.entries.pop(key, None)
         self.entries[key] = value
         self.writes += 1
         while len(self.entries) > self.limit:
             del self.entries[next(iter(self.entries))]
+
+
+class LayeredStore:
+    """A `MemoryStore` in front of a folder's `Store` (the check daemon,
+    `rcsc.daemon`): an entry is read from memory, else from the folder
+    (and then kept in memory), and written to both, so that a check made by
+    the daemon leaves the folder as `rcsc check` would and finds what
+    `rcsc check` stored there."""
+
+    def __init__(self, front: MemoryStore, back: Store) -> None:
+        self.front, self.back = front, back
+
+    def get(self, key: str):
+        value = self.front.get(key)
+        if value is None:
+            value = self.back.get(key)
+            if value is not None:
+                self.front.put(key, value)
+        return value
+
+    def put(self, key: str, value) -> None:
+        self.back.put(key, value)  # raises, as `Store.put` does, for what JSON cannot hold
+        self.front.keep(key, value)
 
 
 def digest(key) -> str:

@@ -193,14 +193,15 @@ def _root_text(path: str) -> str | None:
     return None if text is None else normalized(text)
 
 
-def lookup(path: str, as_module: bool, folder: str) -> Replayed | None:
-    """The stored check of the design `path` if nothing it read has changed, else None."""
+def lookup(path: str, as_module: bool, folder: str, store=None) -> Replayed | None:
+    """The stored check of the design `path` if nothing it read has changed,
+    else None; from `folder`, or from `store` (the check daemon's)."""
     if cache.disabled_by_environment():
         return None
     text = _root_text(path)
     if text is None:
         return None  # the full check reports why
-    found = replay(cache.Store(folder, NAMESPACE), key_of(path, as_module), text)
+    found = replay(store if store is not None else cache.Store(folder, NAMESPACE), key_of(path, as_module), text)
     if found is None:
         return None
     sources, diags = found

@@ -19,6 +19,8 @@ import hashlib
 import re
 from dataclasses import dataclass, field
 
+from rcsc.front.source import edit_between
+
 # The scan looks only at the characters that matter: braces, and `"` and `/`
 # (strings and comments are skipped whole: a brace in them is not one).  At
 # each `{` the text since the last brace says what it opens: at the top
@@ -94,48 +96,12 @@ def controller_items(text: str) -> list[ControllerItem] | None:
     return found
 
 
-def _edit(old: str, new: str) -> tuple[int, int, int]:
-    """(p, old_end, new_end): `old[p:old_end]` became `new[p:new_end]`, the
-    text before and after the same (the longest common prefix, then the
-    longest common suffix of what remains)."""
-    n = min(len(old), len(new))
-    step = 1 << 14
-    p = 0
-    while p < n and old[p:p + step] == new[p:p + step]:
-        p += step
-    hi = min(p + step, n)
-    while p < hi:  # old[:p] == new[:p] and they differ before hi (or hi == n)
-        mid = (p + hi + 1) // 2
-        if old[p:mid] == new[p:mid]:
-            p = mid
-        else:
-            hi = mid - 1
-    limit = n - p  # the suffix must not overlap the prefix
-    s = 0
-    lo, ln = len(old), len(new)
-    while s < limit:
-        k = min(step, limit - s)
-        if old[lo - s - k:lo - s] != new[ln - s - k:ln - s]:
-            break
-        s += k
-    else:
-        return p, lo - s, ln - s
-    hi = min(s + step, limit)
-    while s < hi:
-        mid = (s + hi + 1) // 2
-        if old[lo - mid:lo - s] == new[ln - mid:ln - s]:
-            s = mid
-        else:
-            hi = mid - 1
-    return p, lo - s, ln - s
-
-
 def _rescan(old: str, old_items: list[ControllerItem], new: str) -> tuple[list[ControllerItem], list[int | None]] | None:
     """The controllers of `new`, an edit of `old` whose controllers are
     `old_items`, found by scanning only from the last controller that opens
     before the edit to the first that closes after it; None when that
     stretch does not end as it did (the rest must then be scanned too)."""
-    p, old_end, new_end = _edit(old, new)
+    p, old_end, new_end = edit_between(old, new)
     delta = new_end - old_end
     # The stretch starts at the top level, where the whole scan stood before
     # the controller the edit lies in: before its `{` (`scan_from`) when the
