@@ -59,7 +59,7 @@ def folder() -> str:
     """The user's own folder for daemon sockets, created mode 0700; a folder
     that exists but belongs to someone else or others can enter is refused
     (a socket there could be another user's impostor)."""
-    base = os.environ.get("RCSC_DAEMON_DIR")
+    base = os.path.abspath(os.environ["RCSC_DAEMON_DIR"]) if os.environ.get("RCSC_DAEMON_DIR") else ""
     if not base:
         runtime = os.environ.get("XDG_RUNTIME_DIR")
         if not runtime:
@@ -221,7 +221,19 @@ def client_main(argv: list[str]) -> int | None:
     except (DaemonError, OSError) as exc:
         _write(sys.stderr, f"note: the check daemon could not answer ({exc}); checking in this process\n")
         return None
-    _write(sys.stdout, answer["stdout"])
+    except KeyboardInterrupt:
+        # As `rcsc check` after Ctrl-C (the daemon finishes the check and
+        # keeps it: the next call replays it).
+        _write(sys.stderr, "\nerror: interrupted\n")
+        return 130
+    try:
+        _write(sys.stdout, answer["stdout"])
+        sys.stdout.flush()
+    except BrokenPipeError:
+        # The reader went away (`rcsc check --daemon ... | head`), as `rcsc.cli.main` handles it.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 2
     _write(sys.stderr, answer["stderr"])
     return int(answer["code"])
 

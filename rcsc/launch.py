@@ -19,7 +19,6 @@ def entry() -> None:
         if daemon.wants_daemon(argv):
             code = daemon.client_main(argv)
             if code is not None:
-                sys.stdout.flush()
                 sys.exit(code)
     from rcsc.cli import entry as cli_entry
 

@@ -1281,6 +1281,38 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
 def _stored_key(design: Design, c: m.Controller, plan: m.Plan, canon: _Canon, opts: Options) -> str:
     from rcsc.checks.cache import digest
 
+    preferred = tuple((k, _vkey(_preferred(design, c, k))) for k in canon.keys)
+    return digest(
+        (
+            "guards",
+            opts.timeout_ms,
+            opts.rlimit,
+            c.name,
+            plan.verb,
+            plan.continuous,
+            canon.key(),
+            tuple(canon.keys),
+            tuple(canon.states.items()),
+            preferred,
+            _definitions_key(design),
+        )
+    )
+
+
+# The design whose definitions were digested last (a weak reference: the
+# memo must not keep a checked design alive) and the digest: the same for
+# every plan of a check.
+_definitions_memo: list = [None, ""]
+
+
+def _definitions_key(design: Design) -> str:
+    """A digest of the definitions of every type and function of `design`."""
+    from rcsc.checks.cache import digest
+
+    import weakref
+
+    if _definitions_memo[0] is not None and _definitions_memo[0]() is design:
+        return _definitions_memo[1]
     types = (
         tuple((n, tuple(t.members)) for n, t in sorted(design.enums.items())),
         tuple((n, tuple((fn, str(ft), _range_key(t.field_range(fn))) for fn, ft in t.fields)) for n, t in sorted(design.records.items())),
@@ -1295,23 +1327,9 @@ def _stored_key(design: Design, c: m.Controller, plan: m.Plan, canon: _Canon, op
         )
         for _, f in sorted(design.functions.items())
     )
-    preferred = tuple((k, _vkey(_preferred(design, c, k))) for k in canon.keys)
-    return digest(
-        (
-            "guards",
-            opts.timeout_ms,
-            opts.rlimit,
-            c.name,
-            plan.verb,
-            plan.continuous,
-            canon.key(),
-            tuple(canon.keys),
-            tuple(canon.states.items()),
-            preferred,
-            types,
-            fns,
-        )
-    )
+    key = digest(("definitions", types, fns))
+    _definitions_memo[:] = [weakref.ref(design), key]
+    return key
 
 
 def _range_key(rng) -> tuple | None:
