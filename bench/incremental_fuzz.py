@@ -4,6 +4,7 @@
     python bench/incremental_fuzz.py --seeds 0..49          # designs of the differential tester, edited
     python bench/incremental_fuzz.py --seeds 0..9 --keep /tmp/incr-fails
     python bench/incremental_fuzz.py --seeds 0..49 --memory  # as the language server re-checks
+    python bench/incremental_fuzz.py --seeds 0..19 --daemon  # rcsc check --daemon against fresh processes
 
 For each seed it takes a design (the differential tester's draw for the seed,
 unchecked, so it may hold findings; or an example or a synthetic design),
@@ -20,7 +21,9 @@ process asked before.
 With `--memory` it re-checks successive edits in one process, as the
 language server does (the unchanged controllers' syntax trees kept between
 re-checks), and compares the places of every finding and label with a full
-check's.
+check's.  With `--daemon` it writes successive edits to disk and checks
+each with `rcsc check --daemon`, comparing the JSON report with that of
+`rcsc check --no-cache` in a fresh process.
 
 It prints how many edits took the incremental path (the others are
 checked in full: an edit that changes what other controllers see, a design
@@ -300,16 +303,82 @@ def main_memory(lo: int, hi: int, keep: str | None, verbose: bool) -> int:
     return 1 if bad else 0
 
 
+def run_seed_daemon(seed: int, work: Path, edits: int = 6) -> dict:
+    """The check daemon's way (`--daemon`): successive random edits of the
+    seed's design written to disk, each checked by `rcsc check --daemon`
+    (the daemon keeps the last check and the unchanged controllers' trees)
+    and compared with `rcsc check --no-cache` in a fresh process: the same
+    JSON report (witness values aside, as `normalized` says)."""
+    from rcsc import daemon
+
+    folder = work / f"d{seed}"
+    folder.mkdir()
+    path = folder / "d.rcs"
+    text = design_for(seed)
+    path.write_text(text, encoding="utf-8")
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    here = os.getcwd()
+    os.chdir(folder)
+    try:
+        daemon.request(["d.rcs", "--format", "json"])
+        rng = random.Random(seed)
+        used = 0
+        done: list[str] = []
+        for _ in range(edits):
+            edited = edit_between(text, rng) if rng.random() < 0.25 else edit(text, rng)
+            if edited is None:
+                break
+            text = edited[0]
+            done.append("; ".join(edited[1]))
+            path.write_text(text, encoding="utf-8")
+            got = daemon.request(["d.rcs", "--format", "json"])
+            used += got["answers"] == ["partial"]
+            fresh = _check(folder, "d.rcs", "--format", "json", "--no-cache", env=env)
+            if got["stdout"] != fresh and normalized(got["stdout"]) != normalized(fresh):
+                return {"seed": seed, "used": used, "ok": False, "edits": done}
+    finally:
+        os.chdir(here)
+    return {"seed": seed, "used": used, "ok": True, "edits": done}
+
+
+def main_daemon(lo: int, hi: int, keep: str | None, verbose: bool) -> int:
+    from rcsc import daemon
+
+    used = bad = checks = 0
+    with tempfile.TemporaryDirectory(prefix="incr-fuzz-") as tmp:
+        os.environ["RCSC_DAEMON_DIR"] = str(Path(tmp) / "sockets")
+        os.environ.pop("RCSC_NO_CACHE", None)
+        os.environ.pop("RCSC_INCREMENTAL", None)
+        try:
+            for seed in range(lo, hi + 1):
+                r = run_seed_daemon(seed, Path(tmp))
+                used, checks = used + r["used"], checks + len(r["edits"])
+                if verbose:
+                    print(f"seed {seed}: {r['used']} of {len(r['edits'])} answered in part")
+                if not r["ok"]:
+                    bad += 1
+                    print(f"seed {seed}: DISAGREE after {r['edits']}")
+                    if keep:
+                        shutil.copytree(Path(tmp) / f"d{seed}", Path(keep) / f"d{seed}", dirs_exist_ok=True)
+        finally:
+            daemon.stop()
+    print(f"{hi - lo + 1} designs, {checks} successive edits checked by the daemon, {used} re-checked in part, {bad} disagreements")
+    return 1 if bad else 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", default="0..19", help="A..B (inclusive)")
     ap.add_argument("--keep", help="copy the folders of disagreeing seeds here")
     ap.add_argument("-v", "--verbose", action="store_true", help="one line per seed: the path taken and the edits")
     ap.add_argument("--memory", action="store_true", help="the language server's way: successive edits re-checked in one process")
+    ap.add_argument("--daemon", action="store_true", help="successive edits checked by `rcsc check --daemon`, against fresh processes")
     args = ap.parse_args(argv)
     lo, hi = (int(x) for x in args.seeds.split(".."))
     if args.memory:
         return main_memory(lo, hi, args.keep, args.verbose)
+    if args.daemon:
+        return main_daemon(lo, hi, args.keep, args.verbose)
     used = bad = skipped = exact = 0
     with tempfile.TemporaryDirectory(prefix="incr-fuzz-") as tmp:
         for seed in range(lo, hi + 1):

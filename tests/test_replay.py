@@ -78,6 +78,24 @@ def test_an_unchanged_design_is_replayed_without_the_front_end(tmp_path: Path) -
     assert loaded.strip() == "[]"
 
 
+def test_the_findings_of_each_instance_of_a_type_are_replayed(tmp_path: Path) -> None:
+    """A finding in a controller type's body is reported once per instance,
+    at the same place with the same message (the instances told apart by a
+    label): a replayed check must keep each of them, not merge them."""
+    design = tmp_path / "d.rcs"
+    design.write_text(
+        "design d\n\nimport std.blocks\n\ngm a: f64 = 0.0 to env\ngm b: f64 = 0.0 to env\n\n"
+        "controller type T(out: gm) level 1 budget 1 ms {\n    writes out\n    block filt: LOWPASS(tau = 0.5, dt = 0.01)\n"
+        "    post { out = 1.0; }\n}\n\ncontroller A: T(out = a)\ncontroller B: T(out = b)\n\n"
+        "cpu main {\n    heartbeat 10 ms\n    schedule A, B\n}\n", encoding="utf-8")
+    reference = _fresh(design, "--no-cache")
+    found = [d for d in json.loads(reference[1])["diagnostics"] if d["code"] == "W0261"]
+    assert len(found) == 2 and found[0]["line"] == found[1]["line"] and found[0]["labels"] != found[1]["labels"]
+    assert _fresh(design) == reference  # checks and stores
+    assert len(_results(tmp_path)) == 1
+    assert _fresh(design) == reference  # replays
+
+
 def test_the_stored_findings_are_really_read(tmp_path: Path, capsys) -> None:
     """An entry rewritten (with a valid checksum) to hold no findings is believed."""
     design = _write(tmp_path, MAIN, LIB)

@@ -411,7 +411,8 @@ def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, 
     if any(getattr(d, "_edited", False) for d in kept):
         raise _Miss("a finding with a label in an edited controller")
     diags.items = [d for d in diags.items if not owned(d)] + kept
-    diags._seen = {(d.code, d.message, d.span.file.path if d.span else "", d.span.start if d.span else -1) for d in diags.items}
+    diags._seen = {getattr(d, "_key", None) or (d.code, d.message, d.span.file.path if d.span else "", d.span.start if d.span else -1)
+                   for d in diags.items}
     cached = set(map(id, kept))
     # The solver-based families skip the whole design when names or types
     # failed anywhere (`guards.front_end_errors`): the kept findings hold

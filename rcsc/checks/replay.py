@@ -33,7 +33,7 @@ from rcsc.diagnostics import Diagnostic, Diagnostics, Label, Severity
 from rcsc.front.source import SourceFile, Span, normalized
 
 NAMESPACE = "result"
-FORMAT = 1
+FORMAT = 2  # 2: each finding keeps the key that tells instances apart
 # Findings that depend on something other than the texts of the files read.
 _UNSTORABLE_CODES = frozenset(("E0003",))
 
@@ -88,6 +88,10 @@ def _diag(d: Diagnostic, index: dict[int, int]) -> list:
         list(d.notes),
         list(d.helps),
         cache.encode(d.data),
+        # What tells the findings of two instances of one block or
+        # controller type apart (the same text, the same message): without
+        # it a report that merges findings would keep one of them.
+        "".join(str(x) for x in getattr(d, "_key", ())[4:5]),
     ]
 
 
@@ -117,12 +121,14 @@ def store(store: cache.Store, key: str, files: list[tuple[str, str, object]], di
 
 def decode(data: list, span) -> Diagnostic:
     """A stored finding (`_diag`), its spans made by `span(stored span)`."""
-    code, sev, message, sp, label, labels, notes, helps, extra = data
+    code, sev, message, sp, label, labels, notes, helps, extra, instance = data
     d = Diagnostic(code, Severity(sev), message, span(sp), label)
     d.labels = [Label(span(s), msg) for s, msg in labels]
     d.notes = list(notes)
     d.helps = list(helps)
     d.data = cache.decode(extra, {})
+    key = (d.code, d.message, d.span.file.path if d.span else "", d.span.start if d.span else -1)
+    d._key = key + (str(instance),) if instance else key  # type: ignore[attr-defined]
     return d
 
 
