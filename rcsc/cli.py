@@ -342,9 +342,10 @@ def _run_check(args: argparse.Namespace) -> int:
     if args.daemon and DAEMON_MEMORY is None:
         from rcsc import daemon  # (`rcsc.launch` hands such a call on before this module loads)
 
-        code = daemon.client_main(_ARGV)
-        if code is not None:
-            return code
+        if not daemon.attempted:  # (when it did and no daemon answered, check here)
+            code = daemon.client_main(_ARGV)
+            if code is not None:
+                return code
 
     run = _CheckRun(args)
     expanded = workspace.expand(args.paths)

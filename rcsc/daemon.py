@@ -45,8 +45,12 @@ import time
 # The client imports only what it needs: `rcsc check --daemon` is worth its
 # while when the command itself starts in a few hundredths of a second.
 
-# How long a client waits for a daemon it started to listen, and for an answer.
+# How long a client waits for a daemon it started to listen; how long the
+# daemon waits for a request once a caller connected; how long `status` and
+# `stop` wait for an answer (a check may be running).
 _START_TIMEOUT_S = 30.0
+_REQUEST_TIMEOUT_S = 10.0
+_CONTROL_TIMEOUT_S = 120.0
 _IDLE_DEFAULT_S = 900.0
 _MAX_MESSAGE = 256 * 1024 * 1024
 
@@ -106,9 +110,12 @@ def socket_path() -> str:
     # The environment (a virtual one is its own) and the interpreter, not the
     # name it was started by (`python`, `python3` and a script's first line
     # name the same one).
-    python = f"\0{sys.prefix}\0{os.path.realpath(sys.executable)}\0{sys.version}"
+    python = f"\0{sys.prefix}\0{os.path.realpath(sys.executable)}\0{sys.version}\0{os.environ.get('PYTHONPATH', '')}"
     name = hashlib.sha256(_code_identity() + python.encode()).hexdigest()[:16]
-    return os.path.join(folder(), f"{name}.sock")
+    path = os.path.join(folder(), f"{name}.sock")
+    if len(os.fsencode(path)) > 100:  # a Unix socket's path holds 107 bytes on Linux, 103 on macOS
+        raise DaemonError(f"the daemon's socket path `{path}` is too long for a Unix socket: set RCSC_DAEMON_DIR to a shorter folder")
+    return path
 
 
 # ---- the client ---------------------------------------------------------------------------
@@ -153,9 +160,16 @@ def _start(path: str):
     import subprocess
 
     log = os.path.join(os.path.dirname(path), os.path.basename(path)[:-len(".sock")] + ".log")
+    # It runs in `/` (it must not keep the caller's folder busy, and `-P`
+    # keeps the folder it starts in off its import path: a `z3.py` lying in
+    # the caller's folder must not stand in for z3), with the caller's
+    # PYTHONPATH made absolute (it was relative to the caller's folder).
+    env = dict(os.environ)
+    if env.get("PYTHONPATH"):
+        env["PYTHONPATH"] = os.pathsep.join(os.path.abspath(x) if x else os.getcwd() for x in env["PYTHONPATH"].split(os.pathsep))
     with open(log, "ab") as out:
-        return subprocess.Popen([sys.executable, "-m", "rcsc", "daemon", "serve", "--socket", path], stdin=subprocess.DEVNULL,
-                                stdout=out, stderr=out, start_new_session=True, close_fds=True)
+        return subprocess.Popen([sys.executable, "-P", "-m", "rcsc", "daemon", "serve", "--socket", path], stdin=subprocess.DEVNULL,
+                                stdout=out, stderr=out, start_new_session=True, close_fds=True, cwd="/", env=env)
 
 
 def request(argv: list[str], stdout_is_tty: bool = False, start: bool = True) -> dict:
@@ -174,10 +188,20 @@ def request(argv: list[str], stdout_is_tty: bool = False, start: bool = True) ->
                 break
     if sock is None:
         raise DaemonError(f"no daemon listens on `{path}`" + (" (see the .log file next to it)" if start else ""))
+    umask = os.umask(0o022)
+    os.umask(umask)
+    env = dict(os.environ)
+    if "COLUMNS" not in env:
+        # What argparse would measure here (the daemon's own stdout is no terminal).
+        with contextlib.suppress(OSError, ValueError, AttributeError):
+            env["COLUMNS"] = str(os.get_terminal_size(sys.stdout.fileno()).columns)
     with sock:
-        _send(sock, {"argv": argv, "cwd": os.getcwd(), "env": dict(os.environ), "tty": stdout_is_tty})
+        _send(sock, {"argv": argv, "cwd": os.getcwd(), "env": env, "tty": stdout_is_tty, "umask": umask,
+                     "tty_err": bool(getattr(sys.stderr, "isatty", lambda: False)())})
         answer = _receive(sock)
-    if not isinstance(answer.get("code"), int) or not isinstance(answer.get("stdout"), str) or not isinstance(answer.get("stderr"), str):
+    writes = answer.get("writes")
+    if (not isinstance(answer.get("code"), int) or not isinstance(writes, list)
+            or not all(isinstance(w, list) and len(w) == 2 and w[0] in (1, 2) and isinstance(w[1], str) for w in writes)):
         raise DaemonError(str(answer.get("error") or "the daemon's answer is not one"))
     return answer
 
@@ -212,10 +236,17 @@ def forwarded(argv: list[str]) -> list[str]:
     return out
 
 
+# Whether this process asked the daemon already (`rcsc.launch` does, then
+# `rcsc.cli` would again when the daemon could not answer).
+attempted = False
+
+
 def client_main(argv: list[str]) -> int | None:
     """`rcsc check --daemon ARGS` (argv): the daemon's answer printed, its
     exit code returned; None, with a note on stderr, when no daemon can
     answer (the caller then checks in its own process)."""
+    global attempted
+    attempted = True
     try:
         answer = request(forwarded(argv), stdout_is_tty=bool(getattr(sys.stdout, "isatty", lambda: False)()))
     except (DaemonError, OSError) as exc:
@@ -226,16 +257,25 @@ def client_main(argv: list[str]) -> int | None:
         # keeps it: the next call replays it).
         _write(sys.stderr, "\nerror: interrupted\n")
         return 130
-    try:
-        _write(sys.stdout, answer["stdout"])
-        sys.stdout.flush()
-    except BrokenPipeError:
-        # The reader went away (`rcsc check --daemon ... | head`), as `rcsc.cli.main` handles it.
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
-        return 2
-    _write(sys.stderr, answer["stderr"])
-    return int(answer["code"])
+    code = int(answer["code"])
+    stdout_ok = True
+    for number, text in answer["writes"] + [[1, ""]]:  # the last: flush stdout
+        try:
+            if number == 2:
+                if stdout_ok:
+                    sys.stdout.flush()  # what came before it comes first
+                _write(sys.stderr, text)
+                sys.stderr.flush()
+            elif stdout_ok:
+                _write(sys.stdout, text)
+                sys.stdout.flush()
+        except BrokenPipeError:
+            # The reader of stdout went away (`rcsc check --daemon ... |
+            # head`), as `rcsc.cli.main` handles it: stderr still gets its part.
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+            stdout_ok, code = False, 2
+    return code
 
 
 def _write(stream, text: str) -> None:
@@ -248,11 +288,13 @@ def _write(stream, text: str) -> None:
 
 
 def stop() -> bool:
-    """Ask the daemon of this rcsc to exit; whether one was running."""
+    """Ask the daemon of this rcsc to exit (after the check it may be
+    running); whether one was running."""
     sock = _connect(socket_path())
     if sock is None:
         return False
     with sock:
+        sock.settimeout(_CONTROL_TIMEOUT_S)
         _send(sock, {"stop": True})
         with contextlib.suppress(OSError, DaemonError):
             _receive(sock)
@@ -265,34 +307,53 @@ def status() -> dict | None:
     if sock is None:
         return None
     with sock:
+        sock.settimeout(_CONTROL_TIMEOUT_S)
         _send(sock, {"status": True})
-        return _receive(sock)
+        try:
+            return _receive(sock)
+        except (OSError, socket.timeout) as exc:
+            raise DaemonError(f"the daemon did not answer within {_CONTROL_TIMEOUT_S:g} s (busy with a long check?)") from exc
 
 
 # ---- the daemon ---------------------------------------------------------------------------
 
 
-class _Terminal(io.StringIO):
-    """A captured stdout that says whether the caller's is a terminal (colour follows it)."""
+class _Stream(io.TextIOBase):
+    """A captured stdout or stderr: its writes go, in order with the other
+    stream's, to one list (`rcsc check` writes messages to stderr while it
+    runs and the report to stdout at the end: the caller replays them in
+    that order); it says whether the caller's stream is a terminal (colour
+    follows it)."""
 
-    def __init__(self, tty: bool) -> None:
+    def __init__(self, number: int, writes: list, tty: bool) -> None:
         super().__init__()
-        self._tty = tty
+        self.number, self.writes, self._tty = number, writes, tty
+
+    def write(self, text: str) -> int:
+        if text:
+            self.writes.append([self.number, text])
+        return len(text)
 
     def isatty(self) -> bool:
         return self._tty
+
+    def text(self) -> str:
+        return "".join(t for n, t in self.writes if n == self.number)
 
 
 def _run(message: dict, memory: dict) -> dict:
     """Run one `rcsc check` for a caller, in its folder and environment."""
     from rcsc import cli
 
-    argv, cwd, env = message.get("argv"), message.get("cwd"), message.get("env")
-    if not (isinstance(argv, list) and all(isinstance(a, str) for a in argv) and isinstance(cwd, str) and isinstance(env, dict)):
+    argv, cwd, env, umask = message.get("argv"), message.get("cwd"), message.get("env"), message.get("umask")
+    if not (isinstance(argv, list) and all(isinstance(a, str) for a in argv) and isinstance(cwd, str) and isinstance(env, dict)
+            and isinstance(umask, int)):
         return {"error": "a request the daemon does not understand"}
-    out, err = _Terminal(bool(message.get("tty"))), io.StringIO()
+    writes: list = []
+    out, err = _Stream(1, writes, bool(message.get("tty"))), _Stream(2, writes, bool(message.get("tty_err")))
     saved_env, saved_cwd = dict(os.environ), os.getcwd()
     started = time.process_time()
+    saved_umask = os.umask(umask & 0o777)  # what it writes (`-o`, the cache) is the caller's
     try:
         os.chdir(cwd)
         os.environ.clear()
@@ -305,10 +366,11 @@ def _run(message: dict, memory: dict) -> dict:
         return {"error": f"the daemon cannot work in `{cwd}`: {exc.strerror or exc}"}
     finally:
         cli.DAEMON_MEMORY = None
+        os.umask(saved_umask)
         os.environ.clear()
         os.environ.update(saved_env)
         os.chdir(saved_cwd)
-    return {"stdout": out.getvalue(), "stderr": err.getvalue(), "code": code, "cpu": time.process_time() - started,
+    return {"writes": writes, "stdout": out.text(), "stderr": err.text(), "code": code, "cpu": time.process_time() - started,
             "answers": list(cli.DAEMON_ANSWERS)}
 
 
@@ -324,6 +386,8 @@ def serve(path: str, idle_s: float | None = None) -> int:
             idle_s = float(os.environ.get("RCSC_DAEMON_IDLE", _IDLE_DEFAULT_S))
         except ValueError:
             idle_s = _IDLE_DEFAULT_S
+    if not idle_s >= 1.0:  # NaN, zero and negative values too
+        idle_s = 1.0
     # One daemon per socket: the lock is held for the daemon's life (two
     # clients that start one at once make two, and the second leaves).
     lock = open(path + ".lock", "a")  # noqa: SIM115 - held until exit
@@ -350,11 +414,13 @@ def serve(path: str, idle_s: float | None = None) -> int:
                     return 0
                 continue
             with conn:
-                conn.settimeout(None)
+                # A caller that connects and sends nothing must not hold the others.
+                conn.settimeout(_REQUEST_TIMEOUT_S)
                 try:
                     message = _receive(conn)
                 except (DaemonError, OSError):
                     continue
+                conn.settimeout(None)
                 if message.get("stop"):
                     with contextlib.suppress(OSError):
                         _send(conn, {"stopped": True})

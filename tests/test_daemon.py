@@ -5,7 +5,10 @@ trees it kept) and for a file that does not parse; it leaves the cache
 folder as `rcsc check` does; it refuses a socket folder others can enter
 (and the command then checks in its own process); `rcsc daemon status` and
 `stop` work; a socket left by a daemon that died does not stop a new one;
-an idle daemon exits.
+an idle daemon exits; messages and the report come in the order `rcsc
+check` writes them; a `z3.py` in the caller's folder does not stand in for
+z3; files are written with the caller's umask; a call the daemon cannot
+answer is tried once.
 """
 
 from __future__ import annotations
@@ -171,3 +174,42 @@ def test_an_idle_daemon_exits(tmp_path: Path, env: dict) -> None:
         time.sleep(0.2)
     assert not list(sockets.glob("*.sock"))
     assert "no check daemon is running" in _rcsc(env, tmp_path, "daemon", "status").stdout
+
+
+def _entry(env: dict, cwd: Path, *args: str, umask: int = 0o022) -> subprocess.CompletedProcess:
+    """The `rcsc` command as installed (a script: the current folder is not
+    on its import path), with `umask`, stdout and stderr in one stream."""
+    code = (f"import os, sys; sys.path.pop(0); os.umask({umask}); sys.argv = ['rcsc', *sys.argv[1:]]; "
+            "from rcsc.launch import entry; entry()")
+    return subprocess.run([sys.executable, "-c", code, *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
+                          cwd=cwd, timeout=900)
+
+
+def test_order_of_messages_umask_and_a_shadowing_module(tmp_path: Path, env: dict) -> None:
+    shutil.copy(ROOT / "tests" / "cases" / "W0008_suppressions.rcs", tmp_path / "d.rcs")
+    # Modules lying in the caller's folder, where the daemon is started from.
+    (tmp_path / "z3.py").write_text('raise ImportError("not the real z3")\n', encoding="utf-8")
+    (tmp_path / "networkx.py").write_text('raise ImportError("not the real networkx")\n', encoding="utf-8")
+    args = ("check", "d.rcs", "missing.rcs", "--no-cache", "--color", "never")
+    fresh = _entry(env, tmp_path, *args)
+    assert fresh.returncode == 2 and fresh.stdout.index("missing.rcs") < fresh.stdout.index("warning[")
+    via = _entry(env, tmp_path, *args, "--daemon")
+    assert "not the real" not in via.stdout and "could not answer" not in via.stdout, via.stdout
+    assert (via.returncode, via.stdout) == (fresh.returncode, fresh.stdout)  # messages first, then the report
+    for umask in (0o022, 0o077):
+        out = tmp_path / f"report-{umask:o}.txt"
+        assert _entry(env, tmp_path, "check", "d.rcs", "--daemon", "-o", str(out), umask=umask).returncode == 0
+        assert out.stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_a_daemon_that_cannot_be_reached_is_tried_once(tmp_path: Path, env: dict) -> None:
+    shutil.copy(ROOT / "examples" / "machine_tool" / "machine_tool.rcs", tmp_path / "d.rcs")
+    open_folder = tmp_path / "open"
+    open_folder.mkdir()
+    os.chmod(open_folder, 0o755)
+    via = _rcsc({**env, "RCSC_DAEMON_DIR": str(open_folder)}, tmp_path, "check", "--daemon", "d.rcs")
+    assert via.returncode == 0 and via.stderr.count("could not answer") == 1, via.stderr
+    # An idle time of zero is taken as the shortest there is, not refused.
+    zero = {**env, "RCSC_DAEMON_IDLE": "0"}
+    via = _rcsc(zero, tmp_path, "check", "--daemon", "d.rcs")
+    assert via.returncode == 0 and "could not answer" not in via.stderr, via.stderr

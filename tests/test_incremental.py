@@ -125,6 +125,20 @@ def test_the_scan_after_an_edit_finds_what_a_whole_scan_finds(n, plans, edits) -
                                                     [(it.digest(x.outline(text)), it.digest(x.body_text(text))) for x in whole]))
 
 
+@pytest.mark.parametrize("old, new", [
+    ('controller C level 1{"}', 'controller C level 1{"}"'),
+    ('controller A { a " }\ncontroller B { }\n', 'controller A { a " }"\ncontroller B { }\n'),
+    ('controller C{"}\n"', 'controller C{"}"'),
+])
+def test_a_quote_written_after_a_closing_brace_on_its_line_is_read_again(old: str, new: str) -> None:
+    """A lone `"` before a `}` is a string only when a `"` follows on the
+    line: an edit later on that line changes what the `}` is, so the scan
+    after the edit must start before that line."""
+    it._memo[:] = [None, None, None, None]
+    it.controller_items(old)
+    assert _as_found(it.controller_items(new)) == _as_found(it._scan(new))
+
+
 def test_the_scan_after_an_edit_reads_only_the_edited_controller() -> None:
     text = _design_text(40, 3)
     it._memo[:] = [None, None, None, None]

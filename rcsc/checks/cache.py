@@ -197,7 +197,10 @@ class LayeredStore:
 
     def put(self, key: str, value) -> None:
         self.back.put(key, value)  # raises, as `Store.put` does, for what JSON cannot hold
-        self.front.keep(key, value)
+        if self.back.writable:
+            self.front.keep(key, value)  # the folder just took it: JSON data
+        else:
+            self.front.put(key, value)  # the folder took nothing: the memory checks for itself
 
 
 def digest(key) -> str:

@@ -56,7 +56,8 @@ def _sha(text: str) -> str:
 
 def key_of(path: str, as_module: bool) -> str:
     """The key of the entry of the design `path`: one entry per root file (each check overwrites it)."""
-    env = sorted((k, v) for k, v in os.environ.items() if k.startswith("RCSC_") and k not in ("RCSC_NO_CACHE", "RCSC_INCREMENTAL"))
+    env = sorted((k, v) for k, v in os.environ.items()
+                 if k.startswith("RCSC_") and k not in ("RCSC_NO_CACHE", "RCSC_INCREMENTAL") and not k.startswith("RCSC_DAEMON_"))
     return cache.digest(("replay", FORMAT, path, os.path.realpath(path), as_module, tuple(env)))
 
 

@@ -103,21 +103,26 @@ def _rescan(old: str, old_items: list[ControllerItem], new: str) -> tuple[list[C
     stretch does not end as it did (the rest must then be scanned too)."""
     p, old_end, new_end = edit_between(old, new)
     delta = new_end - old_end
-    # The stretch starts at the top level, where the whole scan stood before
-    # the controller the edit lies in: before its `{` (`scan_from`) when the
-    # edit starts after the end of that line (what the scan read up to then
-    # depends on nothing after it: a comment runs to the end of its line,
-    # and a `"` is a string when its line closes it), else after the `}` of
-    # the controller before it (a brace depends on nothing after it).
+    # The stretch starts at the top level, at a place where the whole scan
+    # stood between two of its steps: before a controller's `{`
+    # (`scan_from`) or after its closing `}` (`end`), or at 0.  What the scan
+    # read up to such a place depends on the text after it up to the end of
+    # its line, no further (a comment runs to the end of its line, and a
+    # lone `"` is a string only when its line closes it), so the place must
+    # lie on a line that ends before the edit: the last such place.
     first = 0
     while first < len(old_items) and old_items[first].end <= p:
         first += 1
-    after_previous = old_items[first - 1].end if first > 0 else 0
-    first_start = after_previous
-    if first < len(old_items):
-        line_end = old.find("\n", old_items[first].scan_from)
-        if 0 <= line_end < p:
-            first_start = old_items[first].scan_from
+    first_start, kept = 0, 0
+    for k in range(min(first, len(old_items) - 1), -1, -1):
+        x = old_items[k]
+        if k < first and _line_ends_before(old, x.end, p):
+            first_start, kept = x.end, k + 1
+            break
+        if _line_ends_before(old, x.scan_from, p):
+            first_start, kept = x.scan_from, k
+            break
+    first = kept
     last = first
     while last < len(old_items) and old_items[last].end < old_end:
         last += 1
@@ -131,6 +136,12 @@ def _rescan(old: str, old_items: list[ControllerItem], new: str) -> tuple[list[C
     found = old_items[:first] + middle + tail
     origin: list[int | None] = list(range(first)) + [None] * len(middle) + list(range(last + 1, len(old_items)))
     return found, origin
+
+
+def _line_ends_before(text: str, at: int, p: int) -> bool:
+    """Whether the line holding offset `at` of `text` ends before offset `p`."""
+    line_end = text.find("\n", at)
+    return 0 <= line_end < p
 
 
 # What the scan stops at: a string (to its closing quote on the line, or the

@@ -45,6 +45,7 @@ def edit_between(old: str, new: str) -> tuple[int, int, int]:
     p = 0
     while p < n and old[p:p + step] == new[p:p + step]:
         p += step
+    p = min(p, n)
     hi = min(p + step, n)
     while p < hi:  # old[:p] == new[:p] and they differ before hi (or hi == n)
         mid = (p + hi + 1) // 2
