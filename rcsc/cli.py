@@ -148,7 +148,8 @@ def _check_in_daemon(path: str, as_module: bool):
         return hit
     driver = _load_driver()
     try:
-        result = driver.check_path(path, as_module=as_module, memory=stores)
+        # The report needs the findings only: the plans' syntax trees go as soon as they are modelled.
+        result = driver.check_path(path, as_module=as_module, memory=stores, keep_plans=False)
     except driver.InputError as exc:
         raise UsageError(str(exc)) from exc
     DAEMON_ANSWERS.append("partial" if result.partial else "full")

@@ -433,7 +433,12 @@ def serve(path: str, idle_s: float | None = None) -> int:
                     calls += 1
                 with contextlib.suppress(OSError):
                     _send(conn, answer)
-                last_call = time.monotonic()
+            if not (message.get("status") or message.get("stop")):
+                # The caller has its answer: what the last checks left can go.
+                from rcsc.driver import collect_if_grown
+
+                collect_if_grown()
+            last_call = time.monotonic()
     finally:
         server.close()
         if _still_ours(path, identity):

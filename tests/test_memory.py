@@ -2,19 +2,24 @@
 
 `rcsc.driver.check_path` pauses the cyclic collector during the run and
 freezes what the run built when it resumes (the first collections would
-otherwise walk the whole heap of a large design); a later run unfreezes
-first, so a long-lived process does not accumulate every run's objects.
+otherwise walk the whole heap of a large design).  A finished check's
+syntax trees and model are freed by reference counting (no cycle through
+the passes that made them keeps them), and a long-lived process (the
+language server, the check daemon) collects what cycles remain now and
+then (`driver.collect_if_grown`): it does not grow with every check.
 AST nodes, spans and model expressions have slots (no per-object dict).
 """
 
 from __future__ import annotations
 
 import gc
+import os
+import weakref
 from pathlib import Path
 
 from rcsc.front import ast
 from rcsc.semantics import model as m
-from rcsc.driver import check_path
+from rcsc.driver import check_path, collect_if_grown
 from rcsc.front.source import SourceFile, Span
 
 SUBMARINE = Path(__file__).resolve().parents[1] / "examples" / "submarine" / "submarine.rcs"
@@ -43,3 +48,41 @@ def test_nodes_have_no_per_object_dictionary() -> None:
     span = Span(src, 0, 1)
     for node in (span, ast.Name(span, "x"), ast.Ident(span, "x"), m.Const(span, None, 1), m.Ref(span, None, "local", "x")):
         assert not hasattr(node, "__dict__"), type(node).__name__
+
+
+def test_a_finished_check_is_freed_by_reference_counting() -> None:
+    """The semantic pass and the file loader made cycles (a scope holding the
+    pass's methods, a recursive reader's closure holding every tree) that
+    kept a finished check's trees and model until a collection."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        result = check_path(str(SUBMARINE))
+        controller = weakref.ref(next(iter(result.model.controllers.values())))
+        loaded = weakref.ref(result.files[0])  # holds the syntax tree
+        design = weakref.ref(result.model)
+        del result
+        assert controller() is None and loaded() is None and design() is None
+    finally:
+        if was:
+            gc.enable()
+
+
+def test_a_long_lived_process_does_not_grow_with_every_check(monkeypatch) -> None:
+    from rcsc.checks import cache, incremental
+
+    monkeypatch.delenv("RCSC_NO_CACHE", raising=False)
+    memory = incremental.memory_stores(cache.MemoryStore())
+    real = os.path.realpath(SUBMARINE)
+    text = SUBMARINE.read_text(encoding="utf-8")
+    check_path(str(SUBMARINE), memory=memory)
+    collect_if_grown(factor=0.0)  # now: the baseline
+    base = gc.get_freeze_count()
+    counts = []
+    for k in range(12):
+        # A comment at the end: outside every controller, so a full check each time.
+        check_path(str(SUBMARINE), overlay={real: text + f"\n// edit {k}\n"}, memory=memory)
+        collect_if_grown()
+        counts.append(gc.get_freeze_count())
+    assert max(counts) < 2 * base + 50_000 + 3 * (counts[0] - base), counts
+    assert collect_if_grown(factor=0.0) and gc.get_freeze_count() < base + 50_000

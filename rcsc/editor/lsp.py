@@ -187,6 +187,7 @@ class RcsServer(LanguageServer):
                 related_information=related or None,
             ))
         self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri=uri, diagnostics=out, version=doc.version))
+        driver.collect_if_grown()  # the findings are out: what the last checks left can go
         return out
 
     def schedule(self, uri: str, delay: float) -> None:

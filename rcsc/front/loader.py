@@ -148,7 +148,14 @@ def path_to_files(
         text = res.read_text(encoding="utf-8")
         visit(SourceFile("<stdlib>/" + item.target.replace(".", "/") + ".rcs", text), key, False, None)
 
-    visit(root, os.path.realpath(path), True, os.path.dirname(path))
+    try:
+        visit(root, os.path.realpath(path), True, os.path.dirname(path))
+    finally:
+        # `visit` and the import readers call each other through this
+        # frame's cells: a cycle that would keep `files` (every syntax tree)
+        # alive until a garbage collection, which a long-lived process (the
+        # language server, the check daemon) runs rarely or never.
+        del visit, _import_file, _import_std
     return files
 
 

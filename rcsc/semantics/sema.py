@@ -570,4 +570,9 @@ def ast_to_model(files: list[LoadedFile], diags: Diagnostics, release_plans: boo
     design.controllers = dict(s.g.controllers)
     design.cpus = s.cpus()
     design.files = [f.source.path for f in files]
+    # The scope's resolvers are methods of the pass: a cycle (pass -> scope
+    # -> method -> pass) that would keep the pass, the syntax trees and the
+    # model alive until a garbage collection, which a long-lived process
+    # (the language server, the check daemon) runs rarely or never.
+    s.g.resolve_const = s.g.resolve_fn = None
     return design
