@@ -287,32 +287,32 @@ def _write(stream, text: str) -> None:
         stream.write(text.encode(encoding, "replace").decode(encoding))
 
 
-def stop() -> bool:
-    """Ask the daemon of this rcsc to exit (after the check it may be
-    running); whether one was running."""
-    sock = _connect(socket_path())
-    if sock is None:
-        return False
-    with sock:
-        sock.settimeout(_CONTROL_TIMEOUT_S)
-        _send(sock, {"stop": True})
-        with contextlib.suppress(OSError, DaemonError):
-            _receive(sock)
-    return True
-
-
-def status() -> dict | None:
-    """What the running daemon says of itself, or None when none runs."""
+def _control(message: dict) -> dict | None:
+    """Send the daemon of this rcsc a control message (`status`, `stop`):
+    its answer, or None when none runs."""
     sock = _connect(socket_path())
     if sock is None:
         return None
     with sock:
-        sock.settimeout(_CONTROL_TIMEOUT_S)
-        _send(sock, {"status": True})
+        sock.settimeout(_CONTROL_TIMEOUT_S)  # it answers once the check it may be running is done
+        _send(sock, message)
         try:
             return _receive(sock)
-        except (OSError, socket.timeout) as exc:
+        except OSError as exc:  # (a time-out too)
             raise DaemonError(f"the daemon did not answer within {_CONTROL_TIMEOUT_S:g} s (busy with a long check?)") from exc
+
+
+def stop() -> bool:
+    """Ask the daemon of this rcsc to exit; whether one was running."""
+    try:
+        return _control({"stop": True}) is not None
+    except DaemonError:
+        return True  # it did not say so, but one was running
+
+
+def status() -> dict | None:
+    """What the running daemon says of itself, or None when none runs."""
+    return _control({"status": True})
 
 
 # ---- the daemon ---------------------------------------------------------------------------
