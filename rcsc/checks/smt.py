@@ -240,25 +240,6 @@ _TRUE_ID = z3.BoolVal(True).get_id()
 _FALSE_ID = z3.BoolVal(False).get_id()
 
 
-def fresh_context() -> None:
-    """Make the z3 terms of the next plan's analysis in a context of their own.
-
-    The solvers run under a resource limit, and what a question costs
-    depends on the context's history: terms made for earlier questions
-    shift the numbering of new ones, so the order in which z3 meets them,
-    so the work it does.  In a shared context, a question near the limit
-    could then be decided in one run and given up on in another (W0518
-    instead of a finding) depending on which plans were analysed before
-    it: a check without the cache, one with it (which skips the stored
-    plans), an incremental re-check and the language server could disagree.
-    Each plan's analysis in a new context sees the same history whatever
-    ran before, so the same answers.  The context is made when the first
-    term is (z3 makes its default context on demand), so a plan that asks
-    z3 nothing costs nothing; one that does pays about a millisecond."""
-    if hasattr(z3.z3, "_main_ctx"):
-        z3.z3._main_ctx = None
-
-
 def _is_true(x) -> bool:
     return x.get_id() == _TRUE_ID
 
