@@ -29,6 +29,7 @@ suite uses it to show that the harness really reports what it finds.
 
 from __future__ import annotations
 
+import ctypes
 import os
 import sys
 import tempfile
@@ -37,6 +38,38 @@ from pathlib import Path
 import atheris
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def _release_comparison_results() -> None:
+    """Stop atheris from keeping the result of every comparison it traces.
+
+    The instrumented code calls `atheris._trace_cmp(left, right, op, ...)`
+    for each comparison, and the native function hands back the result
+    with one reference too many (pybind11 adds one to the `py::handle` it
+    returns, and the new reference from the comparison is never dropped).
+    For `True` and `False` that only inflates a count, but z3's `a == b`
+    makes a new term, and every such term kept alive keeps the z3 context
+    it was made in: with a context per analysed plan (rcsc.checks.smt,
+    `own_context`) the fuzzer grew past 2 GB in 150 inputs.  The wrapper
+    gives the extra reference back; instrumented code finds it because it
+    looks `_trace_cmp` up on the module at each call.  `atheris.Fuzz` puts
+    the fuzzing version there when it starts, so this runs at the first
+    input, and after any later swap.  Checked by
+    tests/test_fuzz_coverage.py (the memory of a bounded run)."""
+    native = atheris._trace_cmp
+    if getattr(native, "releases_results", False):
+        return
+    decref = ctypes.pythonapi.Py_DecRef
+    decref.argtypes = [ctypes.py_object]
+    decref.restype = None
+
+    def trace_cmp(*args):
+        result = native(*args)
+        decref(result)
+        return result
+
+    trace_cmp.releases_results = True  # type: ignore[attr-defined]
+    atheris._trace_cmp = trace_cmp
 sys.path.insert(0, str(ROOT / "tests"))
 
 # Instrument rcsc (and lark, whose parser is half of the parsers oracle) so
@@ -155,7 +188,12 @@ def main(argv: list[str]) -> None:
     replay = [a for a in rest if not a.startswith("-")]
     extra = [] if replay else [str(_seed_corpus(pattern)), f"-dict={_dictionary()}"]
     os.environ.setdefault("RCSC_NO_CACHE", "1")
-    atheris.Setup([argv[0], *rest, *extra], target)
+
+    def one_input(data: bytes) -> None:
+        _release_comparison_results()
+        target(data)
+
+    atheris.Setup([argv[0], *rest, *extra], one_input)
     atheris.Fuzz()
 
 

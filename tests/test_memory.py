@@ -86,3 +86,34 @@ def test_a_long_lived_process_does_not_grow_with_every_check(monkeypatch) -> Non
         counts.append(gc.get_freeze_count())
     assert max(counts) < 2 * base + 50_000 + 3 * (counts[0] - base), counts
     assert collect_if_grown(factor=0.0) and gc.get_freeze_count() < base + 50_000
+
+
+def test_every_solver_context_is_freed_when_its_plan_is_analysed(monkeypatch) -> None:
+    """Each plan is analysed in a z3 context of its own (`smt.own_context`),
+    and no cycle may keep one: the collector does not run during a check, so
+    a context held by a cycle would stay with all its terms.  Every example
+    and test case is checked; the contexts made must all be gone."""
+    import z3
+
+    alive: weakref.WeakSet = weakref.WeakSet()
+    made = [0]
+    init = z3.Context.__init__
+
+    def counting_init(self, *args, **kwargs) -> None:
+        init(self, *args, **kwargs)
+        made[0] += 1
+        alive.add(self)
+
+    monkeypatch.setattr(z3.Context, "__init__", counting_init)
+    monkeypatch.setenv("RCSC_NO_CACHE", "1")
+    root = SUBMARINE.parents[2]
+    files = sorted([*(root / "examples").rglob("*.rcs"), *(root / "tests" / "cases").glob("*.rcs")])
+    assert len(files) > 100
+    left = []
+    for path in files:
+        before = len(alive)
+        check_path(str(path))
+        if len(alive) > before:
+            left.append(path.name)
+    assert made[0] > 100  # the plans were analysed in contexts of their own
+    assert left == []

@@ -132,6 +132,7 @@ from rcsc.checks.smt import _and as _z3_and
 from rcsc.checks.smt import _rational as _rational_of
 from rcsc.checks.smt import to_f64
 from rcsc.checks.smt import neg, real_of
+from rcsc.checks.smt import own_context
 from rcsc.semantics.types import DURATION, ArrayType, EnumType, FloatType, RecordType, Type
 
 # The budget of one solver query.  The resource limit is deterministic (the
@@ -1253,8 +1254,8 @@ def _analyse_plan(design: Design, c: m.Controller, plan: m.Plan, assigned, opts:
                 return
     lit_dead = literal_dead_rules(plan)
     try:
-        an = _Analysis(design, c, plan, assigned, opts, st, nan)
-        findings = an.run(lit_dead)
+        with own_context():
+            findings = _Analysis(design, c, plan, assigned, opts, st, nan).run(lit_dead)
     except HasTypeError:
         return
     except _Incomplete as inc:

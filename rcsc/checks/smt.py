@@ -71,6 +71,7 @@ skips the plan.
 
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 from fractions import Fraction
@@ -240,6 +241,46 @@ _TRUE_ID = z3.BoolVal(True).get_id()
 _FALSE_ID = z3.BoolVal(False).get_id()
 
 
+@contextlib.contextmanager
+def own_context():
+    """Make the z3 terms of one plan's analysis in a context of their own.
+
+    The solvers run under a resource limit, and what a question costs
+    depends on the context's history: terms made for earlier questions
+    shift the numbering of new ones, so the order in which z3 meets them,
+    so the work it does.  In a shared context, a question near the limit
+    could then be decided in one run and given up on in another (W0518
+    instead of a finding) depending on which plans were analysed before
+    it: a check without the cache, one with it (which skips the stored
+    plans), an incremental re-check and the language server could disagree.
+    Each plan's analysis in a new context sees the same history whatever
+    ran before, so the same answers.  The context is made when the first
+    term is (z3 makes its default context on demand), so a plan that asks
+    z3 nothing costs nothing; one that does pays about a millisecond.
+
+    On leaving, the context is let go, and so freed as soon as the last
+    term made in it is.  That must be at once: the collector of cycles
+    does not run during a check (`rcsc.driver.check_path`), so a context
+    held by a cycle would stay until a long-lived process collects, and
+    each one holds its terms' memory.  So the encoders made inside are
+    emptied when it ends (`Encoder.close`), and tests/test_memory.py counts the
+    contexts left after checking every example and test case."""
+    z3.z3._main_ctx = None
+    outer, _open_encoders[:] = list(_open_encoders), []
+    try:
+        yield
+    finally:
+        for enc in _open_encoders:
+            enc.close()
+        _open_encoders[:] = outer
+        z3.z3._main_ctx = None
+
+
+# The encoders made in the current `own_context`, closed when it ends
+# (whether the analysis ended normally or with an exception).
+_open_encoders: list["Encoder"] = []
+
+
 def _is_true(x) -> bool:
     return x.get_id() == _TRUE_ID
 
@@ -343,6 +384,17 @@ class Encoder:
         self._calls: list[ExternCall] = []
         self._arith = False
         self.gm_types = {u.name: design.gm[u.name] for u in controller.reads + controller.writes if u.name in design.gm}
+        _open_encoders.append(self)
+
+    def close(self) -> None:
+        """Let go of every term once the plan is analysed.
+
+        The records of a guard are made on demand by closures that name
+        the encoder, and the encoder keeps the last guard's extern calls,
+        which hold such records: a cycle.  Emptying the encoder breaks it,
+        so its terms, and the plan's z3 context, are freed at once
+        (`own_context`)."""
+        self.inputs, self.side, self._ufs, self._calls, self._used = {}, [], {}, [], {}
 
     # ---- entry point ------------------------------------------------------------
 
@@ -746,27 +798,31 @@ class Encoder:
         for v in vals:
             flat.extend(flatten(v))
         domain = [x.sort() for x in flat]
-
-        def leaf(t: Type, path: tuple):
-            tag = ".".join((f"extern.{e.func}",) + path)
-            if isinstance(t, RecordType):
-                return Rec(t, lambda f: leaf(t.field_type(f), path + (f,)))  # type: ignore[arg-type]
-            if isinstance(t, FloatType):
-                r = self._uf(tag, domain, z3.RealSort())(*flat) if flat else z3.Real(tag)
-                nan = self._uf(tag + ".nan", domain, z3.BoolSort())(*flat) if flat else z3.Bool(tag + ".nan")
-                return F(r, nan)
-            sort = _sort_of(t)
-            term = self._uf(tag, domain, sort)(*flat) if flat else z3.Const(tag, sort)
-            if isinstance(t, EnumType):
-                self.side.append(z3.And(term >= 0, term <= len(t.members) - 1))
-            elif isinstance(t, IntType) or t == DURATION:
-                it = t if isinstance(t, IntType) else I64_T
-                self.side.append(z3.And(term >= it.min, term <= it.max))
-            return term
-
-        result = leaf(e.type, ())
+        result = self._extern_leaf(e.func, e.type, (), flat, domain)
         self._calls.append(ExternCall(e.func, [p.type for p in fn.params], vals, e.type, result))
         return result
+
+    def _extern_leaf(self, func: str, t: Type, path: tuple, flat: list, domain: list):
+        """The result of an extern call, or the field `path` of it: a function of its arguments.
+
+        A method, not a closure that calls itself: such a closure is a
+        cycle, which would keep the terms (and their z3 context) alive
+        after the plan's analysis (`own_context`)."""
+        tag = ".".join((f"extern.{func}",) + path)
+        if isinstance(t, RecordType):
+            return Rec(t, lambda f: self._extern_leaf(func, t.field_type(f), path + (f,), flat, domain))  # type: ignore[arg-type]
+        if isinstance(t, FloatType):
+            r = self._uf(tag, domain, z3.RealSort())(*flat) if flat else z3.Real(tag)
+            nan = self._uf(tag + ".nan", domain, z3.BoolSort())(*flat) if flat else z3.Bool(tag + ".nan")
+            return F(r, nan)
+        sort = _sort_of(t)
+        term = self._uf(tag, domain, sort)(*flat) if flat else z3.Const(tag, sort)
+        if isinstance(t, EnumType):
+            self.side.append(z3.And(term >= 0, term <= len(t.members) - 1))
+        elif isinstance(t, IntType) or t == DURATION:
+            it = t if isinstance(t, IntType) else I64_T
+            self.side.append(z3.And(term >= it.min, term <= it.max))
+        return term
 
 
 def _sort_of(t: Type):

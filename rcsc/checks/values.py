@@ -45,7 +45,7 @@ from rcsc.checks.guards import _ekey, _skey, front_end_errors, nan_params
 from rcsc.checks.plans import plan_states, rule_sources
 from rcsc.diagnostics import Diagnostics
 from rcsc.semantics.model import Design
-from rcsc.checks.smt import F, Encoder, HasTypeError, Unsupported, concrete, format_value, real_of
+from rcsc.checks.smt import F, Encoder, HasTypeError, Unsupported, concrete, format_value, own_context, real_of
 from rcsc.semantics.types import DURATION, FloatType, IntType, RecordType, Type
 
 # As in `rcsc.checks.guards`: the resource limit decides (1M units, about
@@ -80,13 +80,15 @@ def check(design: Design, diags: Diagnostics, store=None) -> None:
                 continue
             flag = (c.name, plan.verb) in nan
             if store is None:
-                _Plan(design, c, plan, period, diags, flag).run()
+                with own_context():
+                    _Plan(design, c, plan, period, diags, flag).run()
                 continue
             key = cache.digest((context, c.name, period, flag, _plan_key(plan)))
             if _replay(store, key, plan, diags):
                 continue
             own = Diagnostics()
-            _Plan(design, c, plan, period, own, flag).run()
+            with own_context():
+                _Plan(design, c, plan, period, own, flag).run()
             _remember(store, key, plan, own)
             diags.extend(own)
 
