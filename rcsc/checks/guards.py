@@ -1213,7 +1213,13 @@ class _Canon:
         return ("?", t.__name__)
 
     def key(self) -> tuple:
-        return tuple(self.parts)
+        # The values a witness prefers for the inputs (`_preferred`: their
+        # initial values) belong to the shape: two plans that differ only
+        # there would otherwise share one witness, and which one depended on
+        # which plan was analysed first (a check without the cache against a
+        # re-check of one controller).
+        preferred = tuple(_vkey(_preferred(self.design, self.c, k)) for k in self.keys)
+        return (*self.parts, preferred)
 
 
 # ---- reporting -------------------------------------------------------------------------
