@@ -5,6 +5,7 @@
     python bench/incremental_fuzz.py --seeds 0..9 --keep /tmp/incr-fails
     python bench/incremental_fuzz.py --seeds 0..49 --memory  # as the language server re-checks
     python bench/incremental_fuzz.py --seeds 0..19 --daemon  # rcsc check --daemon against fresh processes
+    python bench/incremental_fuzz.py --seeds 0..49 --headers 0.8  # mostly edits of controllers' headers
 
 For each seed it takes a design (the differential tester's draw for the seed,
 unchecked, so it may hold findings; or an example or a synthetic design),
@@ -53,6 +54,8 @@ from rcsc.front import items as it  # noqa: E402
 _NUMBER = re.compile(r"(?<![A-Za-z_0-9.])[0-9]+(?:\.[0-9]+)?(?![A-Za-z_0-9.])")
 _CMP = {"<=": "<", "<": "<=", ">=": ">", ">": ">=", "==": "!=", "!=": "=="}
 _CMP_RE = re.compile(r"<=|>=|==|!=|(?<![-<>=!])[<>](?![=])")
+# How often `edit` edits a header instead of plans (`--headers` sets it).
+HEADER_RATE = 0.2
 _RULE = re.compile(r"^[ \t]*[A-Za-z_][A-Za-z0-9_]*:[^\n]*;[^\n]*$", re.M)
 
 
@@ -71,10 +74,14 @@ def design_for(seed: int) -> str:
 
 
 def edit(text: str, rng: random.Random) -> tuple[str, list[str]] | None:
-    """The text with 1 to 3 random edits inside the plan bodies of one or two controllers, and what was done."""
+    """The text with 1 to 3 random edits inside the plan bodies of one or two
+    controllers (a fifth of the time, one edit of a controller's header
+    instead: `edit_header`), and what was done."""
     found = it.controller_items(text)
     if not found:
         return None
+    if rng.random() < HEADER_RATE:
+        return edit_header(text, found, rng)
     with_bodies = [x for x in found if x.bodies]
     if not with_bodies:
         return None
@@ -91,6 +98,40 @@ def edit(text: str, rng: random.Random) -> tuple[str, list[str]] | None:
         text = text[:s] + new_body + text[e:]
         done.append(f"{cname}.{verb}: {what}")
     return (text, done) if done else None
+
+
+def edit_header(text: str, found: list, rng: random.Random) -> tuple[str, list[str]] | None:
+    """The text with one edit of a random controller's header (outside its
+    plan bodies): a number changed (a range, an initial value, a budget, a
+    level), a local added or written twice, a line of `pre` or `post`
+    commented out; and what was done."""
+    x = rng.choice(found)
+    first = x.bodies[0][1] if x.bodies else x.end
+    head_end = text.rfind("plan", x.start, first) if x.bodies else x.end
+    head_end = head_end if head_end > x.start else first
+    head = text[x.start:head_end]
+    kind = rng.choice(("number", "number", "local", "twice", "pre"))
+    if kind == "number":
+        nums = [n for n in _NUMBER.finditer(head)]
+        if not nums:
+            return None
+        n = rng.choice(nums)
+        new = str(int(float(n.group())) + rng.choice((-1, 1, 7))) if "." not in n.group() else n.group() + "5"
+        at = x.start + n.start()
+        return text[:at] + new + text[at + len(n.group()):], [f"{x.name} header: {n.group()} -> {new}"]
+    brace = text.index("{", x.start) + 1
+    if kind == "local":
+        return text[:brace] + "\n    local fz_extra: i32 in 0..9 = 3" + text[brace:], [f"{x.name} header: a local"]
+    lines = [m for m in re.finditer(r"^[ \t]*(local|pre|post)\b[^\n]*$", head, re.M)]
+    if not lines:
+        return None
+    line = rng.choice(lines)
+    at = x.start + line.start()
+    if kind == "twice" and line.group(1) == "local":
+        return text[:at] + line.group() + "\n" + text[at:], [f"{x.name} header: a local written twice"]
+    if line.group().rstrip().endswith("}") and "{" in line.group():
+        return text[:at] + "    // " + text[at:], [f"{x.name} header: a line commented out"]
+    return None
 
 
 def _mutate(body: str, rng: random.Random) -> tuple[str | None, str]:
@@ -361,7 +402,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("-v", "--verbose", action="store_true", help="one line per seed: the path taken and the edits")
     ap.add_argument("--memory", action="store_true", help="the language server's way: successive edits re-checked in one process")
     ap.add_argument("--daemon", action="store_true", help="successive edits checked by `rcsc check --daemon`, against fresh processes")
+    ap.add_argument("--headers", type=float, metavar="RATE", help="how often an edit is one of a header (default 0.2)")
     args = ap.parse_args(argv)
+    if args.headers is not None:
+        global HEADER_RATE
+        HEADER_RATE = args.headers
     lo, hi = (int(x) for x in args.seeds.split(".."))
     if args.memory:
         return main_memory(lo, hi, args.keep, args.verbose)

@@ -248,9 +248,29 @@ def test_findings_of_unchanged_controllers_move_with_the_lines_above_them(checke
 
 
 @pytest.mark.parametrize(
+    "old, new",
+    [
+        ("local count: i32 in 0..1000 = 0", "local count: i32 in 0..1000 = 1"),  # a local's initial value
+        ("local count: i32 in 0..1000 = 0", "local count: i32 in 0..10 = 0"),  # a local's range
+        ("reports AT_GOAL", "reports AT_GOAL, SLOW"),  # a status value its supervisor can read
+        ("status progress: f64 = 0.0", "status progress: f64 in 0.0..50.0 = 0.0"),  # a status field's range
+        ("post { if count > MAX_COUNT", "post { if count >= MAX_COUNT"),  # `post`
+    ],
+)
+def test_an_edit_of_a_header_is_rechecked_in_part_with_the_supervisor(checked: Path, old: str, new: str) -> None:
+    """C2's header changes: C2 and its supervisor C0 are checked again, the
+    others keep their findings; the report is the full check's."""
+    _edit(checked / "d.rcs", old, new, after="controller C2 ")
+    used, why, _ = _both_ways(checked)
+    assert used, why
+
+
+@pytest.mark.parametrize(
     "old, new, why",
     [
-        ("local count: i32 in 0..1000 = 0", "local count: i32 in 0..1000 = 1", "a controller outside its plans changed"),
+        ("budget 100 us {\n    reads c2_raw", "budget 90 us {\n    reads c2_raw",
+         "a controller's level, budget, period, subordinates or Global Memory changed"),
+        ("reads c2_raw, c0_sp", "reads c2_raw", "a controller's level, budget, period, subordinates or Global Memory changed"),
         ("-> error(10)", "-> error(11)", "an edited controller's summary changed"),
         ("<= 1000.0", "<= true", "errors of names or types came or went"),
     ],

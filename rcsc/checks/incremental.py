@@ -1,21 +1,27 @@
-"""Re-check after an edit inside plans: only the edited controllers are parsed and checked again.
+"""Re-check after an edit inside plans or headers: only the edited controllers are parsed and checked again.
 
 `rcsc check` keeps the findings of the last check of each design in
 `.rcsc-cache/` (`rcsc.checks.replay`).  When the root file has changed
-since, but only inside the plans of some controllers (the common edit: a
-rule, a condition, a job), this module answers without parsing or checking
-the other controllers again:
+since, but only inside some controllers (the common edits: a rule, a
+condition, a job; a verb, a parameter's range, a status value, a local),
+this module answers without parsing or checking the other controllers
+again:
 
 1. The root text is cut into its controllers and their plan bodies without
-   parsing (`rcsc.front.items`).  Everything outside the plan bodies -- the
-   declarations, the CPUs, each controller's outline (header, verbs, status,
-   locals, `pre`, `post`) -- must be unchanged, and so must every imported
-   file; otherwise the design is checked in full.
-2. The design is parsed with the plan bodies of the unchanged controllers
-   read as blanks (holes the tokenizer skips: every offset, line and column
+   parsing (`rcsc.front.items`).  The text outside the controllers (the
+   declarations, the CPUs) and every imported file must be unchanged;
+   otherwise the design is checked in full.
+2. The controllers checked again are those whose text changed and the
+   supervisors of those whose header (the outline: header, verbs, status,
+   locals, `pre`, `post`) changed, since a supervisor's plans command its
+   subordinates' verbs and read their status.  What the rest of the design
+   reads of a header -- level, budget, period, kind, subordinates, Global
+   Memory (`controller_head`) -- must be as it was.
+3. The design is parsed with the plan bodies of the other controllers read
+   as blanks (holes the tokenizer skips: every offset, line and column
    stays where it was), so their plans cost nothing.  The parser must find
    exactly the plans the scan found.
-3. Those controllers' plans in the model are `ElidedPlans`: the check
+4. Those controllers' plans in the model are `ElidedPlans`: the check
    families skip them (`model.checked_controllers`), and what other
    controllers' checks read of them -- whether a verb can end in ERROR
    (`plans.failure_of`) and the commands they send with arguments that
@@ -23,9 +29,9 @@ the other controllers again:
    check (`controller_summary`).  Any other read of an elided plan raises
    `PlansElided` and the design is checked in full: a check that needs more
    than the summary is never answered from a stale table.
-4. The edited controllers' summaries must equal their last ones (else what
+5. The checked controllers' summaries must equal their last ones (else what
    other controllers were checked against has changed: full check).
-5. The findings are the last check's findings inside the unchanged
+6. The findings are the last check's findings inside the other
    controllers (moved by the length change of the edits before them) and
    this run's findings everywhere else; suppressions (`rcsc: allow`) are
    applied to the whole again.
@@ -54,7 +60,7 @@ from rcsc.front.source import SourceFile, Span, normalized
 from rcsc.outputs import safeio
 
 NAMESPACE = "outline"
-FORMAT = 1
+FORMAT = 2
 # In a long-lived process only (`memory_stores`): the syntax trees of the
 # unchanged controllers, kept from one re-check to the next (`_KeptTree`).
 TREES = "trees"
@@ -75,6 +81,15 @@ def controller_summary(design, c) -> dict:
         "sends": [list(x) for x in commands_sent(design, c)],
         "failure": {verb: failure_of(design, c.name, verb) for verb in c.plans},
     })
+
+
+def controller_head(c) -> list:
+    """What of `c`'s header the checks of other controllers and the
+    design-wide checks read, beyond its verbs and status: its level, budget,
+    period, kind, subordinates and Global Memory (JSON values).  A re-check
+    after an edit of a header applies only while this is as it was."""
+    return [c.level, c.budget_ns, c.declared_period_ns, c.simulator, [u.name for u in c.subordinates],
+            [u.name for u in c.reads], [u.name for u in c.writes]]
 
 
 def _plain(value):
@@ -130,6 +145,7 @@ def _remember_outline(path: str, as_module: bool, folder: str | None, result, st
         "rest": sums[0],
         "controllers": [[x.name, x.start, x.end, osha, bsha] for x, (osha, bsha) in zip(found, sums[1])],
         "summaries": summaries,
+        "heads": {x.name: controller_head(design.controllers[x.name]) for x in found},
         "values_context": design.values_context,
     }
     target = stores[NAMESPACE] if stores is not None else cache.Store(folder, NAMESPACE)  # type: ignore[arg-type]
@@ -219,25 +235,36 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
     if [x.name for x in new_items] != [n for n, *_ in old_items]:
         raise _Miss("controllers added, removed or renamed")
     changed: set[str] = set()
+    headers: set[str] = set()
     outlines: dict[str, str] = {}
     for x, (name, _, _, osha, bsha), (new_osha, new_bsha) in zip(new_items, old_items, sums[1]):
         if new_osha != osha:
-            raise _Miss("a controller outside its plans changed")
-        outlines[name] = osha
+            headers.add(name)
+        outlines[name] = new_osha
         if new_bsha != bsha:
             changed.add(name)
-    if not changed:
-        raise _Miss("no plan changed")
-    if any(x.name not in summaries for x in new_items):
+    if not changed and not headers:
+        raise _Miss("no controller changed")
+    heads = outline.get("heads")
+    if not isinstance(heads, dict) or any(x.name not in summaries or x.name not in heads for x in new_items):
         raise _Miss("a corrupt entry")
-    elided = [x for x in new_items if x.name not in changed]
+    # An edited header (verbs, their parameters, status, locals, `pre`,
+    # `post`) is read by the controller's own checks and by its
+    # supervisor's plans (the commands they send it, the status and fields
+    # they read of it): the supervisor is checked again too.  What the rest
+    # of the design reads of a header (level, budget, period, subordinates,
+    # Global Memory) must be as it was: checked once it is modelled.
+    supervisors = {name for name, head in heads.items() if isinstance(head, list) and len(head) == 7
+                   and isinstance(head[4], list) and any(sub in headers for sub in head[4])}
+    rechecked = changed | headers | supervisors
+    elided = [x for x in new_items if x.name not in rechecked]
     kept = _kept_trees(stores, key, elided, outlines, sums[0])
     # The parser reads the edited controllers whole, the other controllers
     # with their plan bodies as blanks, and nothing of those whose tree is
     # kept: those are holes in the text, which it reads as blanks.
     holes = [r for x in elided for r in ([(x.start, x.end)] if x.name in kept else [(s, e) for _, s, e in x.bodies])]
-    return _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, changed, summaries, last, values_context,
-                  kept, outlines, sums[0])
+    return _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, rechecked, summaries, last,
+                  None if headers else values_context, kept, outlines, sums[0], {name: heads[name] for name in headers})
 
 
 # ---- syntax trees kept between re-checks (a long-lived process) -----------------------------
@@ -343,7 +370,7 @@ def _keep_trees(stores: dict, key: str, trees: dict, elided: list, kept: dict[st
 
 
 def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, changed, summaries, last, values_context,
-           kept, outlines, rest_sha):
+           kept, outlines, rest_sha, heads):
     from rcsc.checks import check_model, guards, suppress
     from rcsc.checks.hints import add_hints
     from rcsc.front import ast
@@ -385,9 +412,13 @@ def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, 
         design = ast_to_model(loaded, diags, elided_plans={name: summaries[name] for name in elided_names})
     except m.PlansElided:
         raise _Miss("the semantic pass read an elided plan") from None
+    # None after an edit of a header: the value analysis's context (every
+    # controller's header) is digested again.
     design.values_context = values_context
     if any(not m.is_elided(design.controllers[name]) for name in elided_names):
         raise _Miss("the semantic pass modelled an elided controller's plans")
+    if any(_plain(controller_head(design.controllers[name])) != head for name, head in heads.items()):
+        raise _Miss("a controller's level, budget, period, subordinates or Global Memory changed")
 
     # Every finding belongs either to an unchanged controller (the last
     # check's, moved to where that controller is now) or to the rest (this
