@@ -380,3 +380,33 @@ def test_a_doc_comment_written_before_a_controller_is_not_lost_by_a_kept_tree(tm
         assert incremental_fuzz.places(result) == incremental_fuzz.places(full)
     assert result.partial and "W0240" not in {d.code for d in result.diags.items}
     assert result.model.controllers["C1"].doc == "the second"
+
+
+def test_an_edit_of_a_local_reanalyses_only_that_controllers_plans(tmp_path: Path, monkeypatch) -> None:
+    """The value analysis keys each plan by its controller's header and what
+    it sees of its subordinates (verbs, status), not by every header: after
+    an edit of C2's local, the supervisor C0 is checked again but its plans'
+    value findings come from the store; only C2's plans are analysed."""
+    from rcsc.checks import cache, values
+    from rcsc.driver import check_path
+
+    path = tmp_path / "d.rcs"
+    text = synthetic.generate(6, 3, 6)
+    path.write_text(text, encoding="utf-8")
+    memory = incremental.memory_stores(cache.MemoryStore())
+    check_path(str(path), memory=memory)
+    analysed: list[str] = []
+    run = values._Plan.run
+
+    def counting(self) -> None:
+        analysed.append(self.c.name)
+        run(self)
+
+    monkeypatch.setattr(values._Plan, "run", counting)
+    at = text.index("local count: i32 in 0..1000 = 0", text.index("controller C2 "))
+    edited = text[:at] + "local count: i32 in 0..1000 = 5" + text[at + len("local count: i32 in 0..1000 = 0"):]
+    result = check_path(str(path), overlay={os.path.realpath(path): edited}, memory=memory)
+    assert result.partial, incremental.last_miss
+    assert analysed and set(analysed) == {"C2"}
+    full = check_path(str(path), overlay={os.path.realpath(path): edited}, guard_store=memory["guards"])
+    assert incremental_fuzz.places(result) == incremental_fuzz.places(full)

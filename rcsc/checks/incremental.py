@@ -264,7 +264,7 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
     # kept: those are holes in the text, which it reads as blanks.
     holes = [r for x in elided for r in ([(x.start, x.end)] if x.name in kept else [(s, e) for _, s, e in x.bodies])]
     return _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, rechecked, summaries, last,
-                  None if headers else values_context, kept, outlines, sums[0], {name: heads[name] for name in headers})
+                  values_context, kept, outlines, sums[0], {name: heads[name] for name in headers})
 
 
 # ---- syntax trees kept between re-checks (a long-lived process) -----------------------------
@@ -412,8 +412,8 @@ def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, 
         design = ast_to_model(loaded, diags, elided_plans={name: summaries[name] for name in elided_names})
     except m.PlansElided:
         raise _Miss("the semantic pass read an elided plan") from None
-    # None after an edit of a header: the value analysis's context (every
-    # controller's header) is digested again.
+    # The text outside the controllers and the imports are as they were, so
+    # the declarations the value analysis digests are too.
     design.values_context = values_context
     if any(not m.is_elided(design.controllers[name]) for name in elided_names):
         raise _Miss("the semantic pass modelled an elided controller's plans")

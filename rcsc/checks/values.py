@@ -63,15 +63,7 @@ def check(design: Design, diags: Diagnostics, store=None) -> None:
     if front_end_errors(diags):
         return
     nan = nan_params(design)
-    context = None
-    if store is not None:
-        # An incremental re-check (rcsc.checks.incremental) brings the last
-        # check's context: it runs only when everything the context is made
-        # of (all but the plans) is unchanged.
-        context = design.values_context or context_key(design)
-        if context is None:
-            store = None
-        design.values_context = context
+    keys = _Keys(design) if store is not None else None
     for c in m.checked_controllers(design):
         cpu = design.cpus.get(c.cpu) if c.cpu else None
         period = cpu.heartbeat_ns if cpu is not None else None
@@ -79,7 +71,8 @@ def check(design: Design, diags: Diagnostics, store=None) -> None:
             if plan.verb not in c.verbs:
                 continue
             flag = (c.name, plan.verb) in nan
-            if store is None:
+            context = keys.of(c) if keys is not None else None
+            if context is None:
                 with own_context():
                     _Plan(design, c, plan, period, diags, flag).run()
                 continue
@@ -97,14 +90,19 @@ def check(design: Design, diags: Diagnostics, store=None) -> None:
 #
 # A plan's value findings depend on the plan (its rules, conditions and
 # jobs), on the declarations of the whole design (types, constants,
-# functions, Global Memory, every controller but its plans: verbs and their
-# ranges, locals, status fields, CPUs) and on whether the plan's parameters
-# may be NaN (which the supervisors' plans decide; computed every run).  The
-# key holds all of that, spans left out; the findings are stored with their
-# spans as positions among the plan's nodes, so a plan that only moved in
-# the file (an edit above it) reads its findings back at the new place.
+# functions, Global Memory, CPUs), on its controller but its plans (verbs
+# and their ranges, locals, status fields, `pre`, `post`, its rate), on
+# what its plans can see of its subordinates (their verbs with the
+# parameters' ranges, status values and status fields), and on whether the
+# plan's parameters may be NaN (which the supervisors' plans decide;
+# computed every run).  The key holds all of that, spans left out, and no
+# more: an edit of one controller's header leaves the keys of the plans of
+# the controllers other than it and its supervisor as they were.  The
+# findings are stored with their spans as positions among the plan's nodes,
+# so a plan that only moved in the file (an edit above it) reads its
+# findings back at the new place.
 
-FORMAT = 1
+FORMAT = 2
 _FIELDS: dict[type, tuple[str, ...]] = {}
 
 
@@ -129,21 +127,38 @@ def _structure(x):
     return (t.__name__,) + tuple(_structure(getattr(x, n)) for n in names)
 
 
-def context_key(design: Design) -> str | None:
-    """The digest of everything but the plans that a plan's value findings
-    depend on (None if it cannot be stored)."""
-    try:
-        return cache.digest(("values", FORMAT, _structure(_context_of(design))))
-    except cache.NotStorable:
-        return None
+def globals_key(design: Design) -> str:
+    """The digest of the declarations of the whole design that a plan's
+    value findings depend on.  It depends only on the text outside the
+    controllers and on the imported files, so an incremental re-check
+    (rcsc.checks.incremental) brings the last check's in
+    `Design.values_context`."""
+    return cache.digest(("values", FORMAT, _structure(
+        (design.gm, design.consts, design.functions, design.enums, design.records, design.cpus, design.base_tick_ns))))
 
 
-def _context_of(design: Design) -> tuple:
-    controllers = tuple(
-        (name, tuple((f.name, getattr(c, f.name)) for f in dataclasses.fields(c) if f.name != "plans"))
-        for name, c in design.controllers.items()
-    )
-    return (design.gm, design.consts, design.functions, design.enums, design.records, design.cpus, design.base_tick_ns, controllers)
+class _Keys:
+    """The part of a plan's key that is not the plan, per controller (see above), made once per check."""
+
+    def __init__(self, design: Design) -> None:
+        self.design = design
+        self.memo: dict[str, str | None] = {}
+
+    def of(self, c: m.Controller) -> str | None:
+        """None when something in it cannot be stored (the plan is analysed without the store)."""
+        if c.name not in self.memo:
+            try:
+                if self.design.values_context is None:
+                    self.design.values_context = globals_key(self.design)
+                own = tuple((f.name, getattr(c, f.name)) for f in dataclasses.fields(c) if f.name != "plans")
+                subs = []
+                for u in c.subordinates:
+                    sub = self.design.controllers.get(u.name)
+                    subs.append(None if sub is None else (sub.name, sub.verbs, sub.statuses, sub.status_fields))
+                self.memo[c.name] = cache.digest((self.design.values_context, _structure(own), _structure(tuple(subs))))
+            except cache.NotStorable:
+                self.memo[c.name] = None
+        return self.memo[c.name]
 
 
 def _plan_key(plan: m.Plan) -> tuple:

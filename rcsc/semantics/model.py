@@ -433,9 +433,9 @@ class Design:
     # Filled in by the timing check: GM variables in declaration order, then
     # command and status buffers in controller declaration order.
     crossings: list[Crossing] = field(default_factory=list)
-    # Filled in by the value analysis when it keeps results between runs
-    # (`rcsc.checks.values.context_key`), or brought by an incremental
-    # re-check from the last check.
+    # The digest of the declarations the value analysis depends on, made by
+    # it when it keeps results between runs (`rcsc.checks.values.globals_key`),
+    # or brought by an incremental re-check from the last check.
     values_context: str | None = None
 
     @property
