@@ -27,7 +27,9 @@ re-check after the same one-rule edit (in process, `driver.check_path` with
 the overlay and the server's memory of the last check, of the solver's
 analyses and of the unchanged controllers' syntax trees, filled by a first
 check: the incremental re-check), for the first edit after a full check and
-for a later one, and the same for `rcsc check --daemon` (the command's
+for a later one, the same after an edit of a header (a local's initial
+value; the controller and its supervisor are checked again), and the same
+for `rcsc check --daemon` (the command's
 CPU time plus the daemon's for the call; rcsc.daemon).  --profile prints the top cProfile hotspots of one
 in-process run of the largest size.
 
@@ -96,6 +98,15 @@ def edit_one_rule(text: str, to: str = "999.0", controller: str = "C0") -> str:
     return text if i < 0 else text[:i] + "<= " + to + text[i + len("<= 1000.0"):]
 
 
+def edit_header(text: str, value: int, controller: str = "C0") -> str:
+    """The design with the initial value of `controller`'s local `count`
+    set to `value` (an edit of a header: the controller and its supervisor
+    are checked again)."""
+    start = text.index(f"controller {controller} ")
+    m = re.compile(r"local count: i32 in 0\.\.1000 = (\d+)").search(text, start)
+    return text if m is None else text[:m.start(1)] + str(value) + text[m.end(1):]
+
+
 def stages(path: Path) -> dict[str, float]:
     """CPU seconds of each stage of one in-process check (no cache)."""
     from rcsc.checks import FAMILIES
@@ -124,7 +135,7 @@ def stages(path: Path) -> dict[str, float]:
     return out
 
 
-def server_edit(path: Path, later_edits: int = 5) -> tuple[float, float]:
+def server_edit(path: Path, later_edits: int = 5, header: bool = False) -> tuple[float, float]:
     """CPU seconds of the language server's re-check after one edit (in
     process, what `rcsc lsp` keeps between checks: the last check, the
     solver's analyses and the unchanged controllers' syntax trees in
@@ -133,7 +144,8 @@ def server_edit(path: Path, later_edits: int = 5) -> tuple[float, float]:
     first, middle and last controllers in turn, each a constant the solver
     has not seen: the same work as the first edit), as the server re-checks
     while the engineer types.  Single re-checks vary by about 20 % on a
-    shared machine; the median of several is the figure to compare."""
+    shared machine; the median of several is the figure to compare.
+    With `header`, each edit is one of a header instead (`edit_header`)."""
     from rcsc.checks import cache, incremental
     from rcsc.driver import check_path
 
@@ -141,14 +153,18 @@ def server_edit(path: Path, later_edits: int = 5) -> tuple[float, float]:
     memory = incremental.memory_stores(cache.MemoryStore())
     text = path.read_text(encoding="utf-8")
     check_path(str(path), memory=memory)
-    text = edit_one_rule(text)
+    names = re.findall(r"^controller (\w+) ", text, re.M)
+
+    def edited_text(k: int, name: str) -> str:
+        return edit_header(text, 1 + k, name) if header else edit_one_rule(text, f"{990 - k}.0", name)
+
+    text = edit_header(text, 900, names[len(names) // 3]) if header else edit_one_rule(text)
     t = time.process_time()
     check_path(str(path), overlay={real: text}, memory=memory)
     first = time.process_time() - t
-    names = re.findall(r"^controller (\w+) ", text, re.M)
     later = []
     for k in range(later_edits):
-        edited = edit_one_rule(text, f"{990 - k}.0", names[(0, len(names) - 1, len(names) // 2)[k % 3]])
+        edited = edited_text(k, names[(0, len(names) - 1, len(names) // 2)[k % 3]])
         if edited == text:
             break
         text = edited
@@ -286,6 +302,18 @@ def main(argv: list[str] | None = None) -> int:
                 first, later = server_edit(paths[n])
                 server[n] = later
                 print(f"{n:>11}: first edit after a full check {first:.2f}, later edits (median) {later:.2f}", flush=True)
+            print("\nlanguage server re-check after an edit of a header (a local's initial value: the controller and its supervisor\n"
+                  "checked again; in process; CPU s), and `rcsc check` after that edit in a fresh process (warm cache):")
+            for n in sizes:
+                first, later = server_edit(paths[n], header=True)
+                text = paths[n].read_text(encoding="utf-8")
+                run_command(paths[n])  # the cache holds the unedited design
+                names = re.findall(r"^controller (\w+) ", text, re.M)
+                paths[n].write_text(edit_header(text, 77, names[len(names) // 2]), encoding="utf-8")
+                fresh = run_command(paths[n])
+                paths[n].write_text(text, encoding="utf-8")
+                print(f"{n:>11}: first edit after a full check {first:.2f}, later edits (median) {later:.2f}; "
+                      f"fresh process {fresh['cpu']:.2f}", flush=True)
             print("\n`rcsc check --daemon` after one edit (CPU s of the command's process plus the daemon's for the call):")
             for n in sizes:
                 d = daemon_edit(paths[n])
