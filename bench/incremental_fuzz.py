@@ -106,11 +106,20 @@ def edit_header(text: str, found: list, rng: random.Random) -> tuple[str, list[s
     level), a local added or written twice, a line of `pre` or `post`
     commented out; and what was done."""
     x = rng.choice(found)
+    kinds = ["number", "number", "local", "twice", "pre"]
+    rng.shuffle(kinds)
+    for kind in kinds:
+        done = _edit_header(text, x, kind, rng)
+        if done is not None:
+            return done
+    return None
+
+
+def _edit_header(text: str, x, kind: str, rng: random.Random) -> tuple[str, list[str]] | None:
     first = x.bodies[0][1] if x.bodies else x.end
     head_end = text.rfind("plan", x.start, first) if x.bodies else x.end
     head_end = head_end if head_end > x.start else first
     head = text[x.start:head_end]
-    kind = rng.choice(("number", "number", "local", "twice", "pre"))
     if kind == "number":
         nums = [n for n in _NUMBER.finditer(head)]
         if not nums:
