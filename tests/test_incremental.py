@@ -410,3 +410,61 @@ def test_an_edit_of_a_local_reanalyses_only_that_controllers_plans(tmp_path: Pat
     assert analysed and set(analysed) == {"C2"}
     full = check_path(str(path), overlay={os.path.realpath(path): edited}, guard_store=memory["guards"])
     assert incremental_fuzz.places(result) == incremental_fuzz.places(full)
+
+
+_HINTED = """design d
+
+controller TOP level 2 budget 1 ms {
+    subordinates A, B
+    verb RUN
+    plan RUN {
+        E0: true | new -> S1 | A.GO(), B.GO();
+        E1: A.done and B.done | S1 -> done;
+        E2: A.error or B.error | S1 -> error(1);
+    }
+}
+
+controller A level 1 budget 1 ms {
+    verb GO
+    local count: i32 in 0..9 = 0
+    plan GO {
+        E0: speedlimit > 3 | new -> done;
+    }
+}
+
+controller B level 1 budget 1 ms {
+    verb GO
+    local other: i32 in 0..9 = 0
+    plan GO {
+        E0: true | new -> done;
+    }
+}
+
+cpu main {
+    heartbeat 10 ms
+    schedule TOP, A, B
+}
+"""
+
+
+@pytest.mark.parametrize("first, then", [("other", "speedlimt"), ("speedlimt", "other")])
+def test_a_header_edit_that_changes_a_did_you_mean_elsewhere_is_checked_in_full(tmp_path: Path, first: str, then: str) -> None:
+    """A's unknown name `speedlimit` (E0100) gets a "did you mean" chosen
+    among the names declared in every header: renaming B's local (B is not
+    A's supervisor) changes the help of a finding in A, kept from the last
+    check by a re-check in part (found by a second read of the change)."""
+    from rcsc.checks import cache
+    from rcsc.driver import check_path
+
+    path = tmp_path / "d.rcs"
+    text = _HINTED.replace("local other", f"local {first}")
+    path.write_text(text, encoding="utf-8")
+    memory = incremental.memory_stores(cache.MemoryStore())
+    check_path(str(path), memory=memory)
+    edited = text.replace(f"local {first}", f"local {then}")
+    result = check_path(str(path), overlay={os.path.realpath(path): edited}, memory=memory)
+    full = check_path(str(path), overlay={os.path.realpath(path): edited})
+    assert incremental_fuzz.places(result) == incremental_fuzz.places(full)
+    assert not getattr(result, "partial", False) and incremental.last_miss == "the names a hint can suggest changed"
+    helps = [h for d in result.diags.items if d.code == "E0100" for h in d.helps]
+    assert ("did you mean `speedlimt`?" in helps) == (then == "speedlimt")

@@ -41,6 +41,16 @@ def _scope_names(design: Design) -> set[str]:
     return names
 
 
+def scope_names_key(design: Design) -> str:
+    """A digest of the names an unknown name's "did you mean" can suggest
+    (E0100): every controller's locals, status fields, subordinates and
+    verb parameters among them, so an edit of any header can change the
+    help of a finding in another controller (rcsc.checks.incremental)."""
+    import hashlib
+
+    return hashlib.sha256("\n".join(sorted(_scope_names(design))).encode()).hexdigest()
+
+
 def _controller_at(design: Design, d: Diagnostic):
     if d.span is None:
         return None

@@ -92,6 +92,12 @@ def controller_head(c) -> list:
             [u.name for u in c.reads], [u.name for u in c.writes]]
 
 
+def scope_names_key(design) -> str:
+    from rcsc.checks.hints import scope_names_key as key
+
+    return key(design)
+
+
 def _plain(value):
     """`value` as JSON gives it back (lists for tuples), so that summaries compare equal."""
     return json.loads(json.dumps(value))
@@ -146,6 +152,7 @@ def _remember_outline(path: str, as_module: bool, folder: str | None, result, st
         "controllers": [[x.name, x.start, x.end, osha, bsha] for x, (osha, bsha) in zip(found, sums[1])],
         "summaries": summaries,
         "heads": {x.name: controller_head(design.controllers[x.name]) for x in found},
+        "scope": scope_names_key(design),
         "values_context": design.values_context,
     }
     target = stores[NAMESPACE] if stores is not None else cache.Store(folder, NAMESPACE)  # type: ignore[arg-type]
@@ -264,7 +271,7 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
     # kept: those are holes in the text, which it reads as blanks.
     holes = [r for x in elided for r in ([(x.start, x.end)] if x.name in kept else [(s, e) for _, s, e in x.bodies])]
     return _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, rechecked, summaries, last,
-                  values_context, kept, outlines, sums[0], {name: heads[name] for name in headers})
+                  values_context, kept, outlines, sums[0], {name: heads[name] for name in headers}, outline.get("scope"))
 
 
 # ---- syntax trees kept between re-checks (a long-lived process) -----------------------------
@@ -370,7 +377,7 @@ def _keep_trees(stores: dict, key: str, trees: dict, elided: list, kept: dict[st
 
 
 def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, changed, summaries, last, values_context,
-           kept, outlines, rest_sha, heads):
+           kept, outlines, rest_sha, heads, scope):
     from rcsc.checks import check_model, guards, suppress
     from rcsc.checks.hints import add_hints
     from rcsc.front import ast
@@ -441,6 +448,11 @@ def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, 
     kept = [d for d in _moved(last, root, shift, loaded) if d is not None and owned(d)]
     if any(getattr(d, "_edited", False) for d in kept):
         raise _Miss("a finding with a label in an edited controller")
+    # The "did you mean" of an unknown name (E0100) is chosen among names
+    # declared in every controller's header: after an edit of a header, a
+    # kept one holds only while those names are as they were.
+    if heads and any(d.code == "E0100" for d in kept) and scope_names_key(design) != scope:
+        raise _Miss("the names a hint can suggest changed")
     diags.items = [d for d in diags.items if not owned(d)] + kept
     diags._seen = {getattr(d, "_key", None) or (d.code, d.message, d.span.file.path if d.span else "", d.span.start if d.span else -1)
                    for d in diags.items}
