@@ -212,8 +212,14 @@ def nan_params(design: Design) -> set[tuple[str, str]]:
     numbers, never NaN (a scenario's NaN argument is refused, E0206), so the
     parameters of a verb can be NaN only when its supervisor sends that verb
     with an argument that can carry a NaN (see `_may_be_nan`).  Computed once
-    per design, to a fixed point (a parameter passed on down the hierarchy).
+    per design, to a fixed point (a parameter passed on down the hierarchy),
+    and remembered for the design (the guard and the value analyses both
+    ask; a weak reference, so the memo does not keep a checked design alive).
     """
+    import weakref
+
+    if _nan_memo[0] is not None and _nan_memo[0]() is design:
+        return set(_nan_memo[1])
     sends = [(sup.name, *send) for sup in design.controllers.values() for send in commands_sent(design, sup)]
     out: set[tuple[str, str]] = set()
     changed = True
@@ -224,7 +230,12 @@ def nan_params(design: Design) -> set[tuple[str, str]]:
             if key not in out and (nan_if_nan if (sup, verb) in out else nan_if_numbers):
                 out.add(key)
                 changed = True
+    _nan_memo[:] = [weakref.ref(design), frozenset(out)]
     return out
+
+
+# The design `nan_params` answered for last (a weak reference) and its answer.
+_nan_memo: list = [None, frozenset()]
 
 
 def commands_sent(design: Design, sup: m.Controller) -> list[tuple[str, str, str, bool, bool]]:

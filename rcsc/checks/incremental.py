@@ -152,7 +152,8 @@ def _remember_outline(path: str, as_module: bool, folder: str | None, result, st
         "controllers": [[x.name, x.start, x.end, osha, bsha] for x, (osha, bsha) in zip(found, sums[1])],
         "summaries": summaries,
         "heads": {x.name: controller_head(design.controllers[x.name]) for x in found},
-        "scope": scope_names_key(design),
+        # Needed only by a kept unknown-name finding (`_check`).
+        "scope": scope_names_key(design) if any(d.code == "E0100" for d in result.diags.items) else None,
         "values_context": design.values_context,
     }
     target = stores[NAMESPACE] if stores is not None else cache.Store(folder, NAMESPACE)  # type: ignore[arg-type]
