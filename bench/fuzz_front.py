@@ -40,6 +40,22 @@ import atheris
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def _keeps_results(native) -> bool:
+    """Whether `native` (atheris's `_trace_cmp`) keeps a reference to the
+    result of the comparison it traces: asked of the installed atheris, so
+    that a version without the defect is not given references back that
+    it does not hold."""
+    token = object()
+
+    class Left:
+        def __lt__(self, other):
+            return token
+
+    before = sys.getrefcount(token)
+    native(Left(), Left(), 0, 0, False)  # 0: `<`, the comparison's index in dis.cmp_op
+    return sys.getrefcount(token) > before
+
+
 def _release_comparison_results() -> None:
     """Stop atheris from keeping the result of every comparison it traces.
 
@@ -57,7 +73,10 @@ def _release_comparison_results() -> None:
     input, and after any later swap.  Checked by
     tests/test_fuzz_coverage.py (the memory of a bounded run)."""
     native = atheris._trace_cmp
-    if getattr(native, "releases_results", False):
+    if getattr(native, "releases_results", False) or native is _SOUND[0]:
+        return
+    if not _keeps_results(native):
+        _SOUND[0] = native
         return
     decref = ctypes.pythonapi.Py_DecRef
     decref.argtypes = [ctypes.py_object]
@@ -70,6 +89,11 @@ def _release_comparison_results() -> None:
 
     trace_cmp.releases_results = True  # type: ignore[attr-defined]
     atheris._trace_cmp = trace_cmp
+
+
+# The `_trace_cmp` last found to keep no results (`_keeps_results`).
+_SOUND: list = [None]
+
 sys.path.insert(0, str(ROOT / "tests"))
 
 # Instrument rcsc (and lark, whose parser is half of the parsers oracle) so
