@@ -117,3 +117,31 @@ def test_every_solver_context_is_freed_when_its_plan_is_analysed(monkeypatch) ->
             left.append(path.name)
     assert made[0] > 100  # the plans were analysed in contexts of their own
     assert left == []
+
+
+def test_a_solver_context_of_its_own_nests_and_holds_no_encoder_made_outside() -> None:
+    """`own_context` gives the caller's context back on leaving (an
+    enclosing analysis keeps making terms in its own), and an encoder made
+    outside any (as the tests of the encoding do) is not held by the next
+    check (found by a second read of the change)."""
+    import z3
+
+    from rcsc.checks import smt
+
+    with smt.own_context():
+        a = z3.Int("a")
+        with smt.own_context():
+            inner = z3.Int("a")
+        b = z3.Int("b")
+        assert a.ctx is b.ctx and inner.ctx is not a.ctx
+        solver = z3.Solver()
+        solver.add(a > 0, b > a)
+        assert solver.check() == z3.sat
+    result = check_path(str(SUBMARINE))
+    top = next(c for c in result.model.controllers.values() if c.verbs)
+    encoder = smt.Encoder(result.model, top, next(iter(top.verbs.values())), 10_000_000)
+    held = weakref.ref(encoder)
+    check_path(str(SUBMARINE))
+    assert smt._open_encoders == []
+    del encoder
+    assert held() is None

@@ -258,27 +258,30 @@ def own_context():
     term is (z3 makes its default context on demand), so a plan that asks
     z3 nothing costs nothing; one that does pays about a millisecond.
 
-    On leaving, the context is let go, and so freed as soon as the last
-    term made in it is.  That must be at once: the collector of cycles
+    On leaving, the context is let go (the caller's is the default again),
+    and so freed as soon as the last term made in it is.  That must be at once: the collector of cycles
     does not run during a check (`rcsc.driver.check_path`), so a context
     held by a cycle would stay until a long-lived process collects, and
     each one holds its terms' memory.  So the encoders made inside are
     emptied when it ends (`Encoder.close`), and tests/test_memory.py counts the
     contexts left after checking every example and test case."""
+    outer = getattr(z3.z3, "_main_ctx", None)
     z3.z3._main_ctx = None
-    outer, _open_encoders[:] = list(_open_encoders), []
+    _open_encoders.append([])
     try:
         yield
     finally:
-        for enc in _open_encoders:
+        for enc in _open_encoders.pop():
             enc.close()
-        _open_encoders[:] = outer
-        z3.z3._main_ctx = None
+        # The context of whoever called (an enclosing `own_context`, or the
+        # shared one) is the default again.
+        z3.z3._main_ctx = outer
 
 
-# The encoders made in the current `own_context`, closed when it ends
-# (whether the analysis ended normally or with an exception).
-_open_encoders: list["Encoder"] = []
+# The encoders made in each `own_context` entered and not yet left, the
+# innermost last: closed when it ends (whether the analysis ended normally
+# or with an exception).  An encoder made outside any is not held.
+_open_encoders: list[list["Encoder"]] = []
 
 
 def _is_true(x) -> bool:
@@ -384,7 +387,8 @@ class Encoder:
         self._calls: list[ExternCall] = []
         self._arith = False
         self.gm_types = {u.name: design.gm[u.name] for u in controller.reads + controller.writes if u.name in design.gm}
-        _open_encoders.append(self)
+        if _open_encoders:
+            _open_encoders[-1].append(self)
 
     def close(self) -> None:
         """Let go of every term once the plan is analysed.
