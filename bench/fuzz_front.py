@@ -91,6 +91,26 @@ def _release_comparison_results() -> None:
     atheris._trace_cmp = trace_cmp
 
 
+def _report_memory() -> None:
+    """Print the process's peak memory when it has grown by 25 MB since
+    last printed (`peak memory N MB`; tests/test_fuzz_coverage.py reads it).
+
+    libFuzzer's own `rss:` figures come from getrusage, whose peak Linux
+    carries over `exec` from the process that started this one: under a
+    test suite that has grown, they say the suite's size.  The high-water
+    mark of /proc/self/status (VmHWM) is this process's own."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            kib = next(int(line.split()[1]) for line in status if line.startswith("VmHWM:"))
+    except (OSError, StopIteration, ValueError):
+        return
+    if kib >= _PEAK[0] + 25 * 1024:
+        _PEAK[0] = kib
+        print(f"peak memory {kib // 1024} MB", flush=True)
+
+
+_PEAK = [0]
+
 # The `_trace_cmp` last found to keep no results (`_keeps_results`).
 _SOUND: list = [None]
 
@@ -216,6 +236,7 @@ def main(argv: list[str]) -> None:
     def one_input(data: bytes) -> None:
         _release_comparison_results()
         target(data)
+        _report_memory()
 
     atheris.Setup([argv[0], *rest, *extra], one_input)
     atheris.Fuzz()
