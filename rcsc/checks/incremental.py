@@ -92,12 +92,6 @@ def controller_head(c) -> list:
             [u.name for u in c.reads], [u.name for u in c.writes]]
 
 
-def scope_names_key(design) -> str:
-    from rcsc.checks.hints import scope_names_key as key
-
-    return key(design)
-
-
 def _plain(value):
     """`value` as JSON gives it back (lists for tuples), so that summaries compare equal."""
     return json.loads(json.dumps(value))
@@ -132,6 +126,8 @@ def remember(path: str, as_module: bool, folder: str | None, result, stores: dic
 
 
 def _remember_outline(path: str, as_module: bool, folder: str | None, result, stores: dict | None) -> None:
+    from rcsc.checks import hints
+
     design = getattr(result, "model", None)
     loaded = getattr(result, "files", None)
     if (stores is None and cache.disabled_by_environment()) or design is None or not loaded or not loaded[0].is_root:
@@ -153,7 +149,7 @@ def _remember_outline(path: str, as_module: bool, folder: str | None, result, st
         "summaries": summaries,
         "heads": {x.name: controller_head(design.controllers[x.name]) for x in found},
         # Needed only by a kept unknown-name finding (`_check`).
-        "scope": scope_names_key(design) if any(d.code == "E0100" for d in result.diags.items) else None,
+        "scope": hints.scope_names_key(design) if any(d.code == "E0100" for d in result.diags.items) else None,
         "values_context": design.values_context,
     }
     target = stores[NAMESPACE] if stores is not None else cache.Store(folder, NAMESPACE)  # type: ignore[arg-type]
@@ -379,7 +375,7 @@ def _keep_trees(stores: dict, key: str, trees: dict, elided: list, kept: dict[st
 
 def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, changed, summaries, last, values_context,
            kept, outlines, rest_sha, heads, scope):
-    from rcsc.checks import check_model, guards, suppress
+    from rcsc.checks import check_model, guards, hints, suppress
     from rcsc.checks.hints import add_hints
     from rcsc.front import ast
     from rcsc.front.loader import path_to_files
@@ -452,7 +448,7 @@ def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, 
     # The "did you mean" of an unknown name (E0100) is chosen among names
     # declared in every controller's header: after an edit of a header, a
     # kept one holds only while those names are as they were.
-    if heads and any(d.code == "E0100" for d in kept) and scope_names_key(design) != scope:
+    if heads and any(d.code == "E0100" for d in kept) and hints.scope_names_key(design) != scope:
         raise _Miss("the names a hint can suggest changed")
     diags.items = [d for d in diags.items if not owned(d)] + kept
     diags._seen = {getattr(d, "_key", None) or (d.code, d.message, d.span.file.path if d.span else "", d.span.start if d.span else -1)
