@@ -265,6 +265,8 @@ def own_context():
     each one holds its terms' memory.  So the encoders made inside are
     emptied when it ends (`Encoder.close`), and tests/test_memory.py counts the
     contexts left after checking every example and test case."""
+    if not _allocator_tuned:
+        _keep_solver_memory()
     outer = getattr(z3.z3, "_main_ctx", None)
     z3.z3._main_ctx = None
     _open_encoders.append([])
@@ -276,6 +278,45 @@ def own_context():
         # The context of whoever called (an enclosing `own_context`, or the
         # shared one) is the default again.
         z3.z3._main_ctx = outer
+
+
+# Whether `_keep_solver_memory` ran in this process.
+_allocator_tuned = False
+
+# glibc's `mallopt` parameters (malloc.h).
+_M_TRIM_THRESHOLD = -1
+_M_MMAP_THRESHOLD = -3
+
+
+def _keep_solver_memory() -> None:
+    """Let the C allocator keep the memory of a freed z3 context for the next one.
+
+    Each z3 context allocates two blocks of about 8.5 MB and frees them
+    when it ends.  glibc's default thresholds are adaptive: the first such
+    block is mapped, and once freed, raises the mapping threshold to its size
+    and the trim threshold to twice it, about 17 MB.  From then on the
+    blocks come from the top of the heap, and freeing both leaves just
+    more than 17 MB free there, which glibc gives back to the system; the
+    next context asks for it again, and the kernel hands out zeroed pages,
+    one fault per 4 KB page.  On a design of 100 controllers that was 1.3
+    million page faults, 2 s of system time on top of 3.9 s of work.
+    Blocks up to 32 MB (glibc's largest mapping threshold) now come from
+    the heap, and up to 32 MB free at its top stays in the process.  The
+    peak memory is about the same (the blocks were in use at the peak
+    anyway).  Only the speed changes, never a result; elsewhere than glibc
+    nothing is done."""
+    global _allocator_tuned
+    _allocator_tuned = True
+    import ctypes
+    import platform
+
+    if platform.system() != "Linux" or platform.libc_ver()[0] != "glibc":
+        return
+    mallopt = getattr(ctypes.CDLL(None), "mallopt", None)
+    if mallopt is None:
+        return
+    mallopt(_M_MMAP_THRESHOLD, 32 << 20)
+    mallopt(_M_TRIM_THRESHOLD, 32 << 20)
 
 
 # The encoders made in each `own_context` entered and not yet left, the
