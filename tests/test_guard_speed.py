@@ -10,7 +10,7 @@ from __future__ import annotations
 import z3
 
 from rcsc.checks import held, smt
-from rcsc.checks.guards import rule_vector
+from rcsc.checks.guard_analysis import rule_vector
 from rcsc.semantics import model as m
 
 

@@ -36,7 +36,7 @@ from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
 from rcsc.semantics import model as m
-from rcsc.checks import guards
+from rcsc.checks import guard_analysis, guard_replay, guards
 from rcsc.checks.plans import literal_dead_rules, plan_states, rule_sources
 from rcsc.diagnostics import Diagnostics
 from rcsc.driver import check_path
@@ -57,9 +57,9 @@ def replay(design: m.Design, diag) -> None:
     plan = c.plans[data["plan"]]
     state = data["state"]
     witness = data["sample"] if diag.code == "W0517" else data["witness"]
-    values = guards.witness_keys(design, c.name, plan.verb, witness)
-    sim = Simulator(design, externs=guards.extern_table(data.get("externs", [])))
-    env = guards.apply_witness(sim, c.name, plan, state, values)
+    values = guard_replay.witness_keys(design, c.name, plan.verb, witness)
+    sim = Simulator(design, externs=guard_replay.extern_table(data.get("externs", [])))
+    env = guard_replay.apply_witness(sim, c.name, plan, state, values)
     rt = sim.runtimes[c.name]
     assert rt.status.state == state and rt.plan is plan
     fired = sim.select_rule(plan, state, env)
@@ -336,7 +336,7 @@ def brute_force(plan: m.Plan) -> Counter:
                 if ri.next.kind == "error":
                     continue
                 for rj in rs[a + 1:]:
-                    if (ri.index, rj.index) in reported or guards._outcome(ri, s) == guards._outcome(rj, s):
+                    if (ri.index, rj.index) in reported or guard_analysis._outcome(ri, s) == guard_analysis._outcome(rj, s):
                         continue
                     if not live[(rj.index, s)]:
                         continue

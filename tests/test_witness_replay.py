@@ -120,7 +120,7 @@ def _replay_value(design, d) -> None:
     """Put the plan in the witness's state with its inputs: the rule fires, and the value leaves its range or wraps."""
     from types import SimpleNamespace
 
-    from rcsc.checks.guards import apply_witness, witness_keys
+    from rcsc.checks.guard_replay import apply_witness, witness_keys
     from rcsc.semantics.evaluate import eval_expr
     from rcsc.semantics.types import DURATION, IntType
     from rcsc.sim.simulate import Simulator

@@ -51,7 +51,7 @@ from dataclasses import dataclass, field
 import z3
 
 from rcsc.semantics import model as m
-from rcsc.checks.guards import rule_vector
+from rcsc.checks.guard_analysis import rule_vector
 from rcsc.checks.smt import neg
 from rcsc.checks.plans import DONE, ERROR, failure_of, rule_target
 
@@ -105,7 +105,7 @@ def commands(rule: m.Rule) -> tuple[list[m.Command], list[m.Command]]:
 
 
 class Held:
-    """The (state, context) graph of one plan, over the guard analysis `an` (a `guards._Analysis`)."""
+    """The (state, context) graph of one plan, over the guard analysis `an` (a `guard_analysis._Analysis`)."""
 
     def __init__(self, an) -> None:
         self.an = an

@@ -41,7 +41,8 @@ from rcsc.codes import CODES
 from rcsc.diagnostics import Diagnostic, Label, Severity
 from rcsc.front.source import Span
 from rcsc.semantics import model as m
-from rcsc.checks.guards import _ekey, _skey, front_end_errors, nan_params
+from rcsc.checks.guard_analysis import _ekey, _skey
+from rcsc.checks.guards import front_end_errors, nan_params
 from rcsc.checks.plans import plan_states, rule_sources
 from rcsc.diagnostics import Diagnostics
 from rcsc.semantics.model import Design
