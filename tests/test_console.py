@@ -278,8 +278,11 @@ def test_full_screen_view_on_a_pty(builds: Builds) -> None:
     with Running(main_program(builds, "c"), "--paused") as prog:
         master, slave = pty.openpty()
         fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 30, 140, 0, 0))
+        # curses takes LINES and COLUMNS over the terminal's size when they
+        # are set (pytest-xdist's workers set 24 x 80): the pty's size counts.
+        screen_env = {k: v for k, v in os.environ.items() if k not in ("LINES", "COLUMNS")} | {"TERM": "xterm"}
         con = subprocess.Popen([*RCSC, "console", str(SUBMARINE), "--run", prog.run, "--screen"], stdin=slave,
-                               stdout=slave, stderr=slave, cwd=ROOT, close_fds=True, env=dict(os.environ, TERM="xterm"))
+                               stdout=slave, stderr=slave, cwd=ROOT, close_fds=True, env=screen_env)
         os.close(slave)
         try:
             drawn = read_until(master, "budget_us")
