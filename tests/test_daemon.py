@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import tempfile
 import subprocess
 import sys
 import time
@@ -34,10 +35,15 @@ def env(tmp_path, monkeypatch):
     monkeypatch.delenv("RCSC_INCREMENTAL", raising=False)
     out = {k: v for k, v in os.environ.items() if k not in ("RCSC_NO_CACHE", "RCSC_INCREMENTAL", "NO_COLOR", "FORCE_COLOR")}
     out["PYTHONPATH"] = str(ROOT)
-    out["RCSC_DAEMON_DIR"] = str(tmp_path / "sockets")
+    # A Unix socket's path holds at most 107 bytes, and pytest's folders
+    # are long (pytest-xdist adds a folder per worker): the sockets go in a
+    # short folder of the test's own, which the daemon makes.
+    short = tempfile.mkdtemp(prefix="rcsd-", dir="/tmp" if os.path.isdir("/tmp") else None)
+    out["RCSC_DAEMON_DIR"] = os.path.join(short, "sockets")
     out["RCSC_DAEMON_IDLE"] = "120"
     yield out
     subprocess.run([sys.executable, "-m", "rcsc", "daemon", "stop"], env=out, capture_output=True, timeout=60)
+    shutil.rmtree(short, ignore_errors=True)
 
 
 def _rcsc(env: dict, cwd: Path, *args: str) -> subprocess.CompletedProcess:
