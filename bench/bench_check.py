@@ -87,7 +87,8 @@ def run_command(path: Path, *extra: str, incremental: bool = True, env: dict | N
     proc.returncode = os.waitstatus_to_exitcode(status)
     proc.stderr.close()
     rss = usage.ru_maxrss / (1024 * 1024) if sys.platform == "darwin" else usage.ru_maxrss / 1024
-    return {"cpu": usage.ru_utime + usage.ru_stime, "wall": wall, "rss": rss, "rc": proc.returncode}
+    return {"cpu": usage.ru_utime + usage.ru_stime, "wall": wall, "rss": rss, "rc": proc.returncode,
+            "sys": usage.ru_stime, "faults": usage.ru_minflt}
 
 
 def edit_one_rule(text: str, to: str = "999.0", controller: str = "C0") -> str:
@@ -290,6 +291,13 @@ def main(argv: list[str] | None = None) -> int:
             rules = n * args.plans * args.rules
             print(f"{n:>11} {rules:>6} {path.stat().st_size / 1024:>6.0f}Ki | {_cell(cold):>21} | {_cell(warm):>21} | {_cell(edit):>21} | "
                   f"{_cell(edit_full):>21} | {cold['rc']}", flush=True)
+
+        # System time is mostly page faults: memory given back to the system
+        # and asked for again (see smt._keep_solver_memory) shows here first.
+        print("\ncold runs, system time and page faults:")
+        for n in sizes:
+            cold = results[n]["cold"]
+            print(f"{n:>11}: system {cold['sys']:.2f} s of {cold['cpu']:.2f} s CPU, {cold['faults']:,} minor page faults", flush=True)
 
         if not args.no_stages:
             print("\nstages of one in-process cold run (CPU s):")
