@@ -30,6 +30,7 @@ suite uses it to show that the harness really reports what it finds.
 from __future__ import annotations
 
 import ctypes
+import fnmatch
 import os
 import sys
 import tempfile
@@ -202,7 +203,13 @@ def _seed_corpus(pattern: str) -> Path:
     libFuzzer adds what it finds to the first corpus folder; a temporary one
     keeps the checkout clean."""
     folder = Path(tempfile.mkdtemp(prefix="rcsc-corpus-"))
-    for k, path in enumerate(sorted(p for p in ROOT.rglob(pattern) if ".venv" not in p.parts and "build" not in p.parts)):
+    # build/, cargo's target/ and the virtual environments are not entered:
+    # a build running at the same time would pull a folder from under the walk.
+    paths = []
+    for where, dirs, files in os.walk(ROOT):
+        dirs[:] = [d for d in dirs if d not in ("build", "target", ".git") and not d.startswith(".venv")]
+        paths.extend(Path(where) / f for f in fnmatch.filter(files, pattern))
+    for k, path in enumerate(sorted(paths)):
         (folder / f"{k:04d}-{path.name}").write_bytes(path.read_bytes()[:20000])
     return folder
 

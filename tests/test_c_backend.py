@@ -185,6 +185,7 @@ def test_bad_event_file_is_reported_with_its_line(builds: Builds, tmp_path: Path
     assert proc.stderr == f"{bad}:3: error: `PR` takes commands only from its supervisor\n", proc.stderr
 
 
+@pytest.mark.serial  # reads the program's output for fixed times: alone, not next to a build
 def test_console_pause_single_step_and_quit(builds: Builds) -> None:
     """Appendix B's keyboard: `p` pauses, `s` runs one cycle, `q` quits (on a terminal)."""
     exe = builds.c_binary(SUBMARINE, "gcc-O2")

@@ -268,6 +268,7 @@ def test_init_option_sends_the_verb_at_start_up(builds: Builds, target: str) -> 
     assert stuck.returncode == 2 and "--paused needs a console" in stuck.stderr
 
 
+@pytest.mark.serial  # waits for the screen with time limits: alone, not next to a build
 def test_full_screen_view_on_a_pty(builds: Builds) -> None:
     """`--screen` (curses): the table is drawn, typed lines reach the program
     (checked afterwards from a line-mode console), `exit` leaves it running."""

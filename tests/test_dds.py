@@ -40,6 +40,10 @@ from test_multicpu_targets import C_CONFIGS, CASES, RELAY, TWOCPU, _realtime_rep
 
 from rcsc import cli
 
+# Real-time runs and machine-wide resources: these tests run alone, after the
+# others (the README's test command, `-m serial`).
+pytestmark = pytest.mark.serial
+
 ROOT = Path(__file__).resolve().parent.parent
 MC = ROOT / "tests" / "mc"
 

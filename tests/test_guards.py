@@ -586,9 +586,9 @@ def test_examples_analyse_fast() -> None:
             continue
         result = check_path(str(p))
         diags = Diagnostics()
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         guards.check(result.model, diags)
-        total += time.perf_counter() - t0
+        total += time.process_time() - t0
         assert not list(diags)
     assert total < 5.0  # the goal is 1 s (bench/bench_guards.py); generous for slow CI machines
 

@@ -44,7 +44,14 @@ def _cache_on(monkeypatch):
 
 
 def _designs() -> list[Path]:
-    return sorted(p for p in ROOT.glob("**/*.rcs") if ".rcsc-cache" not in p.parts and "target" not in p.parts)
+    """Every .rcs file of the checkout.  Folders that builds make and delete
+    (build/, cargo's target/) are not entered: another test's build running
+    at the same time would pull a folder from under the walk."""
+    out = []
+    for folder, dirs, files in os.walk(ROOT):
+        dirs[:] = [d for d in dirs if d not in ("build", "target", ".rcsc-cache", ".git") and not d.startswith(".venv")]
+        out.extend(Path(folder) / f for f in files if f.endswith(".rcs"))
+    return sorted(out)
 
 
 def test_the_scan_finds_what_the_parser_finds_in_every_design() -> None:

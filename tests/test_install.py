@@ -16,6 +16,13 @@ import sysconfig
 import zipfile
 from pathlib import Path
 
+import pytest
+
+# `pip wheel` builds in the checkout's build/ folder, which other tests' walks
+# of the checkout would see appear and vanish: this file runs alone, after
+# the others (the README's test command, `-m serial`).
+pytestmark = pytest.mark.serial
+
 ROOT = Path(__file__).resolve().parent.parent
 
 

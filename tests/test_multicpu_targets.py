@@ -38,6 +38,10 @@ from c_build import event_file, first_difference, generate, multi_cpu_examples
 
 from rcsc import cli
 
+# Real-time runs and machine-wide resources: these tests run alone, after the
+# others (the README's test command, `-m serial`).
+pytestmark = pytest.mark.serial
+
 ROOT = Path(__file__).resolve().parent.parent
 MC = ROOT / "tests" / "mc"
 TWOCPU = ROOT / "tests" / "sim" / "multicpu.rcs"

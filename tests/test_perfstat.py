@@ -30,6 +30,10 @@ import pytest
 
 from rcsc import cli
 
+# Real-time runs and machine-wide resources: these tests run alone, after the
+# others (the README's test command, `-m serial`).
+pytestmark = pytest.mark.serial
+
 ROOT = Path(__file__).resolve().parent.parent
 PERF = ROOT / "tests" / "perf"
 DESIGN = PERF / "perf.rcs"

@@ -254,6 +254,7 @@ def test_help_and_bad_options(crate: Crate) -> None:
     assert proc.returncode == 2 and proc.stderr.startswith("rcs: --trace needs a value\n")
 
 
+@pytest.mark.serial  # no overrun of a 1 ms budget: alone, not next to a build
 def test_timing_table(crate: Crate) -> None:
     proc = run(crate.release, "--fast", "--no-console", "--cycles", "5")
     assert proc.returncode == 0 and proc.stdout == ""
@@ -301,6 +302,7 @@ def test_realtime_runs_or_says_what_is_missing(crate: Crate) -> None:
 
 
 @pytest.mark.skipif(sys.platform != "linux", reason="signals and ptys as on Linux")
+@pytest.mark.serial  # reads the program's output for fixed times: alone, not next to a build
 def test_console_pause_single_step_and_quit(crate: Crate) -> None:
     """On a terminal: `p` pauses, `s` runs one cycle, `p` resumes, `q` quits; the terminal is restored."""
     import termios

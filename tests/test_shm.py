@@ -17,6 +17,10 @@ from pathlib import Path
 
 import pytest
 
+# Real-time runs and machine-wide resources: these tests run alone, after the
+# others (the README's test command, `-m serial`).
+pytestmark = pytest.mark.serial
+
 ROOT = Path(__file__).resolve().parents[1]
 RUNTIME = ROOT / "backends" / "c" / "runtime"
 HAMMER = ROOT / "tests" / "c" / "shm_hammer.c"
