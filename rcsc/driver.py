@@ -60,7 +60,13 @@ def check_path(
     # reach; reference counting still frees it), or the first collections
     # after the run would walk the whole heap.  What an earlier run froze is
     # unfrozen first, so a long-lived process (an editor's language server,
-    # a test suite) does not keep the garbage of every run.
+    # a test suite) does not keep the garbage of every run.  The garbage that
+    # only the collector frees (see `collect_if_grown`) is collected here when
+    # it has doubled since the last collection: a program that checks in a
+    # loop stays bounded without calling `collect_if_grown` itself (the
+    # language server and the daemon also call it at quiet moments, so
+    # their checks seldom pay for it).
+    collect_if_grown()
     was_enabled = gc.isenabled()
     gc.disable()
     gc.unfreeze()
@@ -83,6 +89,10 @@ def check_path(
 # How many objects the last collection of `collect_if_grown` left frozen.
 _kept_after_collection = [0]
 
+# Frozen objects allowed on top of `factor` times what the last collection
+# kept: a small process (a few checks of a small design) never collects.
+_SLACK = 50_000
+
 
 def collect_if_grown(factor: float = 2.0) -> bool:
     """For a long-lived process (the language server, the check daemon), at
@@ -98,7 +108,7 @@ def collect_if_grown(factor: float = 2.0) -> bool:
     collection costs time in proportion to what is kept (0.15 s for such a
     design), so it runs when that has doubled, not after every check."""
     frozen = gc.get_freeze_count()
-    if frozen <= factor * _kept_after_collection[0] + 50_000:
+    if frozen <= factor * _kept_after_collection[0] + _SLACK:
         return False
     was_enabled = gc.isenabled()
     gc.disable()
