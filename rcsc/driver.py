@@ -8,6 +8,7 @@ code 2); everything else is a diagnostic.
 from __future__ import annotations
 
 import gc
+import sys
 from dataclasses import dataclass
 
 from rcsc.checks import cache, suppress
@@ -66,7 +67,7 @@ def check_path(
     # loop stays bounded without calling `collect_if_grown` itself (the
     # language server and the daemon also call it at quiet moments, so
     # their checks seldom pay for it).
-    collect_if_grown()
+    collect_if_grown(_FACTOR)
     was_enabled = gc.isenabled()
     gc.disable()
     gc.unfreeze()
@@ -86,29 +87,39 @@ def check_path(
             gc.enable()
 
 
-# How many objects the last collection of `collect_if_grown` left frozen.
-_kept_after_collection = [0]
+# The memory blocks in use after the last collection of `collect_if_grown`;
+# at first, those in use when this module was imported (the modules' own
+# objects: a process's first check does not collect them).
+_kept_after_collection = [sys.getallocatedblocks()]
 
-# Frozen objects allowed on top of `factor` times what the last collection
-# kept: a small process (a few checks of a small design) never collects.
-_SLACK = 50_000
+# Blocks allowed on top of `factor` times what the last collection kept (a
+# few megabytes): a small process (a few checks of a small design) never
+# collects.
+_SLACK = 200_000
+
+# `check_path` collects when the memory in use has grown this many times.
+_FACTOR = 2.0
 
 
 def collect_if_grown(factor: float = 2.0) -> bool:
-    """For a long-lived process (the language server, the check daemon), at
-    a quiet moment after a check: a full garbage collection when the objects
-    frozen since the last one (`check_path` freezes what each run leaves)
-    have grown `factor` times; whether one ran.
+    """A full garbage collection when the memory in use has grown `factor`
+    times since the last one; whether one ran.  `check_path` calls it
+    before each check, and a long-lived process (the language server, the
+    check daemon) at a quiet moment after one.
 
     Some of a check's objects hold themselves (an expression keeps the
     closure compiled for it and the list of its sub-expressions, each
-    naming it), so reference counting alone does not free a finished check:
-    without a collection a long-lived process grows by what each check
-    leaves (about 5 MB per re-check of a 200-controller design).  A
-    collection costs time in proportion to what is kept (0.15 s for such a
-    design), so it runs when that has doubled, not after every check."""
-    frozen = gc.get_freeze_count()
-    if frozen <= factor * _kept_after_collection[0] + _SLACK:
+    naming it), so reference counting alone does not free a finished check,
+    and `check_path` freezes what each run leaves: without a collection a
+    process that checks again and again grows by what each check leaves
+    (about 5 MB per re-check of a 200-controller design).  A collection
+    costs time in proportion to what is kept (0.15 s for such a design), so
+    it runs when that has doubled, not after every check.  The measure is
+    Python's count of allocated memory blocks, which costs microseconds;
+    counting the frozen objects walks them (2.6 ms for a small design's,
+    as long as a small check)."""
+    blocks = sys.getallocatedblocks()
+    if blocks <= factor * _kept_after_collection[0] + _SLACK:
         return False
     was_enabled = gc.isenabled()
     gc.disable()
@@ -117,7 +128,7 @@ def collect_if_grown(factor: float = 2.0) -> bool:
         gc.collect()
     finally:
         gc.freeze()
-        _kept_after_collection[0] = gc.get_freeze_count()
+        _kept_after_collection[0] = sys.getallocatedblocks()
         if was_enabled:
             gc.enable()
     return True
