@@ -148,12 +148,15 @@ def server_edit(path: Path, later_edits: int = 5, header: bool = False) -> tuple
     shared machine; the median of several is the figure to compare.
     With `header`, each edit is one of a header instead (`edit_header`)."""
     from rcsc.checks import cache, incremental
-    from rcsc.driver import check_path
+    from rcsc.driver import check_path, collect_if_grown
 
     real = os.path.realpath(path)
     memory = incremental.memory_stores(cache.MemoryStore())
     text = path.read_text(encoding="utf-8")
     check_path(str(path), memory=memory)
+    # As the server does once the findings are out (not timed: the engineer
+    # is not waiting for it).
+    collect_if_grown()
     names = re.findall(r"^controller (\w+) ", text, re.M)
 
     def edited_text(k: int, name: str) -> str:
@@ -163,6 +166,7 @@ def server_edit(path: Path, later_edits: int = 5, header: bool = False) -> tuple
     t = time.process_time()
     check_path(str(path), overlay={real: text}, memory=memory)
     first = time.process_time() - t
+    collect_if_grown()
     later = []
     for k in range(later_edits):
         edited = edited_text(k, names[(0, len(names) - 1, len(names) // 2)[k % 3]])
@@ -172,6 +176,7 @@ def server_edit(path: Path, later_edits: int = 5, header: bool = False) -> tuple
         t = time.process_time()
         check_path(str(path), overlay={real: text}, memory=memory)
         later.append(time.process_time() - t)
+        collect_if_grown()
     return first, statistics.median(later) if later else first
 
 
