@@ -15,6 +15,13 @@ GOLDEN = TESTS / "golden"
 # no on-disk cache by default
 # ---------------------------------------------------------------------------
 
+def pytest_configure(config: pytest.Config) -> None:
+    # For the whole run, module fixtures included (they run before the
+    # function fixture below): a fixture that builds a test design would
+    # otherwise leave `.rcsc-cache/` in tests/.
+    os.environ["RCSC_NO_CACHE"] = "1"
+
+
 @pytest.fixture(autouse=True)
 def _no_disk_cache(monkeypatch):
     """`rcsc check` would write `.rcsc-cache/` next to every design it checks,
