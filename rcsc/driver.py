@@ -67,7 +67,7 @@ def check_path(
     # loop stays bounded without calling `collect_if_grown` itself (the
     # language server and the daemon also call it at quiet moments, so
     # their checks seldom pay for it).
-    collect_if_grown(_FACTOR)
+    collect_if_grown()
     was_enabled = gc.isenabled()
     gc.disable()
     gc.unfreeze()
@@ -97,13 +97,13 @@ _kept_after_collection = [sys.getallocatedblocks()]
 # collects.
 _SLACK = 200_000
 
-# `check_path` collects when the memory in use has grown this many times.
+# `collect_if_grown` collects when the memory in use has grown this many times.
 _FACTOR = 2.0
 
 
-def collect_if_grown(factor: float = 2.0) -> bool:
+def collect_if_grown(factor: float | None = None) -> bool:
     """A full garbage collection when the memory in use has grown `factor`
-    times since the last one; whether one ran.  `check_path` calls it
+    times (`_FACTOR` unless given) since the last one; whether one ran.  `check_path` calls it
     before each check, and a long-lived process (the language server, the
     check daemon) at a quiet moment after one.
 
@@ -118,6 +118,7 @@ def collect_if_grown(factor: float = 2.0) -> bool:
     Python's count of allocated memory blocks, which costs microseconds;
     counting the frozen objects walks them (2.6 ms for a small design's,
     as long as a small check)."""
+    factor = _FACTOR if factor is None else factor
     blocks = sys.getallocatedblocks()
     if blocks <= factor * _kept_after_collection[0] + _SLACK:
         return False

@@ -20,12 +20,10 @@ import z3
 from rcsc.semantics import model as m
 from rcsc.checks.plans import plan_states, rule_sources
 from rcsc.semantics.model import Design
-from rcsc.checks.smt import APPROX_ARITH, F, Encoder, Encoding, HasTypeError, Unsupported, concrete
-from rcsc.front.source import Span
+from rcsc.checks.smt import APPROX_ARITH, F, Encoder, Encoding, HasTypeError, Unsupported, concrete, neg, real_of, to_f64
 from rcsc.checks.smt import _and as _z3_and
 from rcsc.checks.smt import _rational as _rational_of
-from rcsc.checks.smt import to_f64
-from rcsc.checks.smt import neg, real_of
+from rcsc.front.source import Span
 from rcsc.semantics.types import DURATION, ArrayType, EnumType, RecordType, Type
 
 if TYPE_CHECKING:

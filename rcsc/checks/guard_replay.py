@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 from types import SimpleNamespace
 
-
 from rcsc.semantics import model as m
 from rcsc.semantics.model import Design
 from rcsc.semantics.types import EnumType, FloatType, Type

@@ -4,8 +4,6 @@ witness in words and in `Diagnostic.data`.
 
 from __future__ import annotations
 
-
-
 from rcsc.semantics import model as m
 from rcsc.diagnostics import Diagnostic, Diagnostics
 from rcsc.semantics.model import Design

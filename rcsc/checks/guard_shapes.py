@@ -15,7 +15,6 @@ from __future__ import annotations
 from dataclasses import fields
 from typing import TYPE_CHECKING
 
-
 from rcsc.semantics import model as m
 from rcsc.semantics.model import Design
 from rcsc.checks.guard_analysis import _ekey, _Finding, _is_fixed, _preferred, _skey, _vkey

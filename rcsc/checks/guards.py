@@ -114,13 +114,11 @@ import os
 import time
 from dataclasses import dataclass, field
 
-
 from rcsc.semantics import model as m
 from rcsc.checks.plans import literal_dead_rules
 from rcsc.diagnostics import Diagnostics, Severity
 from rcsc.semantics.model import Design
-from rcsc.checks.smt import HasTypeError
-from rcsc.checks.smt import own_context
+from rcsc.checks.smt import HasTypeError, own_context
 from rcsc.semantics.types import FloatType, RecordType
 from rcsc.checks.guard_analysis import RLIMIT, TIMEOUT_MS, _Analysis, _assigned_in_pre_post, _Finding, _Incomplete
 from rcsc.checks.guard_report import _report
