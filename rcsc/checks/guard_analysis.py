@@ -641,12 +641,10 @@ class _Analysis:
                             break
             # W0541: `done` unreachable along the held statuses.
             if not self.plan.continuous:
-                import networkx as nx
-
                 from rcsc.checks.plans import DONE as _DONE
                 from rcsc.checks.plans import state_graph
 
-                done_states = nx.ancestors(state_graph(self.plan), _DONE)
+                done_states = state_graph(self.plan).ancestors(_DONE)
                 trapped = h.trapped(g, done_states)
                 # Shown where a rule to `done` is written but cannot fire (else the first such node).
                 exits = {

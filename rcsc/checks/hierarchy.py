@@ -9,23 +9,32 @@ about nine subordinates.
 
 from __future__ import annotations
 
-import networkx as nx
-
 from rcsc.diagnostics import Diagnostics
+from rcsc.semantics import graphs
 from rcsc.semantics.model import Design
 
 MAX_SUBORDINATES = 9
 
 
-def command_graph(design: Design) -> nx.DiGraph:
-    """supervisor -> subordinate edges, nodes in declaration order."""
-    g = nx.DiGraph()
-    for c in design.controllers.values():
-        g.add_node(c.name)
+def command_graph(design: Design) -> dict[str, dict[str, None]]:
+    """supervisor -> subordinates, in declaration order."""
+    g: dict[str, dict[str, None]] = {c.name: {} for c in design.controllers.values()}
     for c in design.controllers.values():
         for use in c.subordinates:
-            g.add_edge(c.name, use.name)
+            g[c.name][use.name] = None
+            g.setdefault(use.name, {})
     return g
+
+
+def _cycles(g: dict[str, dict[str, None]]) -> list[list[str]]:
+    """The simple cycles of the command graph `g`, each as the controllers along it."""
+    if not graphs.has_cycle(g):
+        return []
+    nx = graphs.networkx()
+    graph = nx.DiGraph()
+    graph.add_nodes_from(g)
+    graph.add_edges_from((a, b) for a, bs in g.items() for b in bs)
+    return sorted(nx.simple_cycles(graph), key=lambda cy: sorted(cy))
 
 
 def check(design: Design, diags: Diagnostics) -> None:
@@ -51,7 +60,7 @@ def check(design: Design, diags: Diagnostics) -> None:
 
     # Cycles (self-loops were reported above).
     cycle_edges: set[tuple[str, str]] = set()
-    for cycle in sorted(nx.simple_cycles(g), key=lambda cy: sorted(cy)):
+    for cycle in _cycles(g):
         if len(cycle) == 1:
             continue
         cycle_edges.update(zip(cycle, cycle[1:] + cycle[:1]))

@@ -6,14 +6,15 @@ every reachable state `done` or `error` reachable unless the plan is
 one `otherwise` per state; at most one command per subordinate in a job list;
 a state that waits on a subordinate must also handle that subordinate's error
 when the subordinate can fail for a verb this controller sends it.
-The state graph is built with networkx; node "new" is the entry and the
-nodes "<done>" and "<error>" are the terminals.
+In the state graph node "new" is the entry and the nodes "<done>" and
+"<error>" are the terminals.  What every plan is asked (what `new` reaches,
+what reaches the terminals) is answered by `rcsc.semantics.graphs`;
+networkx describes what is wrong when something is.
 """
 
 from __future__ import annotations
 
-import networkx as nx
-
+from rcsc.semantics import graphs
 from rcsc.semantics import model as m
 from rcsc.diagnostics import Diagnostics
 from rcsc.checks.hints import closest
@@ -51,17 +52,48 @@ def rule_target(rule: m.Rule, source: str) -> str | None:
     return None  # `new` as next state: reported in sema
 
 
-def state_graph(plan: m.Plan) -> nx.MultiDiGraph:
-    """The plan's state graph: an edge per (rule, source state), keyed by rule index."""
+class StateGraph:
+    """Where a plan's rules lead: the successors of each state, in the order
+    the rules are written (the nodes are the plan's states, then the
+    terminals)."""
+
+    __slots__ = ("succ", "_pred")
+
+    def __init__(self, succ: dict[str, dict[str, None]]) -> None:
+        self.succ = succ
+        self._pred: dict[str, list[str]] | None = None
+
+    def descendants(self, state: str) -> set[str]:
+        return graphs.descendants(self.succ, state)
+
+    def ancestors(self, state: str) -> set[str]:
+        if self._pred is None:
+            self._pred = graphs.reverse(self.succ)
+        return graphs.descendants(self._pred, state)
+
+    def subgraph(self, region: list[str]):
+        """The `networkx.DiGraph` of the states in `region` and the edges among them."""
+        nx = graphs.networkx()
+        inside = set(region)
+        sub = nx.DiGraph()
+        sub.add_nodes_from(n for n in self.succ if n in inside)
+        sub.add_edges_from((a, b) for a, bs in self.succ.items() if a in inside for b in bs if b in inside)
+        return sub
+
+
+def state_graph(plan: m.Plan) -> StateGraph:
+    """The plan's state graph: an edge from each state in which a rule is evaluated to where it leads."""
     states = plan_states(plan)
-    g = nx.MultiDiGraph()
-    g.add_nodes_from(states + [DONE, ERROR])
+    succ: dict[str, dict[str, None]] = {s: {} for s in states}
+    succ[DONE] = {}
+    succ[ERROR] = {}
     for r in plan.rules:
         for src in rule_sources(r, states):
             dst = rule_target(r, src)
             if dst is not None:
-                g.add_edge(src, dst, key=r.index, rule=r)
-    return g
+                succ[src][dst] = None
+                succ.setdefault(dst, {})
+    return StateGraph(succ)
 
 
 def is_always_true(e: m.Expr | None) -> bool:
@@ -74,12 +106,11 @@ def check(design: Design, diags: Diagnostics) -> None:
             _check_plan(design, c, plan, diags)
 
 
-def _region_ends(g: nx.MultiDiGraph, region: list[str], sources: bool) -> list[str]:
+def _region_ends(g: StateGraph, region: list[str], sources: bool) -> list[str]:
     """The first state (in `region` order) of each source (or sink) component of `region`'s subgraph."""
     if not region:
         return []
-    sub = nx.DiGraph(g.subgraph(region))
-    cond = nx.condensation(sub)
+    cond = graphs.networkx().condensation(g.subgraph(region))
     order = {s: i for i, s in enumerate(region)}
     ends = []
     for comp in cond.nodes:
@@ -114,7 +145,7 @@ def _check_plan(design: Design, c: m.Controller, plan: m.Plan, diags: Diagnostic
 
     states = plan_states(plan)
     g = state_graph(plan)
-    reachable = nx.descendants(g, "new") | {"new"}
+    reachable = g.descendants("new") | {"new"}
     # Report the causes, not their consequences: of the unreachable states,
     # those that no other unreachable state leads to (sources of the
     # unreachable region); of the states that cannot finish, those whose way
@@ -132,17 +163,17 @@ def _check_plan(design: Design, c: m.Controller, plan: m.Plan, diags: Diagnostic
                 diag.with_help(f"a rule leads to `{orphan}`, which has no rules of its own: did you mean `{s}` there? A misspelt next state makes a new state")
             elif typo is not None:
                 diag.with_help(f"did you mean `{typo}`? A misspelt state name makes a new state")
-            after = sorted(nx.descendants(g, s) & set(unreachable))
+            after = sorted(g.descendants(s) & set(unreachable))
             if after:
                 diag.with_note("so are the states it leads to: " + ", ".join(f"`{x}`" for x in after))
     if not plan.continuous:
-        ends = nx.ancestors(g, DONE) | nx.ancestors(g, ERROR)
+        ends = g.ancestors(DONE) | g.ancestors(ERROR)
         trapped = [s for s in states if s in reachable and s not in ends]
         for s in _region_ends(g, trapped, sources=False):
             ref = _first_mention(plan, s) if s != "new" else None
             span = ref.span if ref is not None else plan.name_span
             diag = diags.add("E0503", span, f"from state `{s}` plan `{plan.verb}` can never finish", "no way to `done` or `error`")
-            before = sorted(x for x in trapped if x != s and s in nx.descendants(g, x))
+            before = sorted(x for x in trapped if x != s and s in g.descendants(x))
             if before:
                 diag.with_note("states that lead here cannot finish either: " + ", ".join(f"`{x}`" for x in before))
             diag.with_help(f"add a rule that leads to `done` or `error(...)`, or declare `plan {plan.verb} continuous`")
@@ -154,15 +185,14 @@ def _check_plan(design: Design, c: m.Controller, plan: m.Plan, diags: Diagnostic
     _check_error_handling(design, c, plan, states, diags)
 
 
-def _check_fail_only(plan: m.Plan, g: nx.MultiDiGraph, reachable: set[str], ends: set[str], diags: Diagnostics) -> None:
+def _check_fail_only(plan: m.Plan, g: StateGraph, reachable: set[str], ends: set[str], diags: Diagnostics) -> None:
     """W0526: a loop of states whose only ways out fail, in a plan that can succeed."""
-    succeed = nx.ancestors(g, DONE)
+    succeed = g.ancestors(DONE)
     fail_only = [s for s in plan_states(plan) if s in reachable and s in ends and s not in succeed]
     if not fail_only or "new" in fail_only:
         # A plan that always fails (an ABORT) is a design choice, not a loop.
         return
-    sub = nx.DiGraph(g.subgraph(fail_only))
-    for comp in nx.strongly_connected_components(sub):
+    for comp in graphs.networkx().strongly_connected_components(g.subgraph(fail_only)):
         if len(comp) < 2:
             continue
         first = min(comp, key=fail_only.index)

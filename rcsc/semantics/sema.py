@@ -11,14 +11,13 @@ can still run and report their own findings in the same run.
 
 from __future__ import annotations
 
-import networkx as nx
-
 from rcsc.front import ast
 from rcsc.semantics import model as m
 from rcsc.diagnostics import Diagnostics
 from rcsc.front.instantiate import expand
 from rcsc.front.loader import LoadedFile
 from rcsc.front.source import Span
+from rcsc.semantics import graphs
 from rcsc.semantics.typecheck import BUILTIN_FUNCS, CONVERSIONS, MATH_FUNCS, Checker, Globals, Scope
 from rcsc.semantics.types import BUILTIN_TYPES, DURATION, ERROR, I32, EnumType, ErrorType, RecordType, Type, array_of
 
@@ -401,14 +400,22 @@ class _Sema:
                 self.controller_body(self.g.controllers[name], item)
 
     def _recursion(self) -> None:
-        graph = nx.DiGraph()
+        calls: dict[str, dict[str, None]] = {}
         for fn in self.g.functions.values():
-            graph.add_node(fn.name)
+            calls.setdefault(fn.name, {})
             if fn.body is None:
                 continue
             for e in m.walk_expr(fn.body):
                 if isinstance(e, m.Call) and e.kind == "fn":
-                    graph.add_edge(fn.name, e.func)
+                    calls[fn.name][e.func] = None
+        if not graphs.has_cycle(calls):
+            return
+        nx = graphs.networkx()
+        graph = nx.DiGraph()
+        for name, callees in calls.items():
+            graph.add_node(name)
+            for callee in callees:
+                graph.add_edge(name, callee)
         for cycle in sorted(nx.simple_cycles(graph), key=lambda c: sorted(c)):
             first = min(cycle)
             fn = self.g.functions[first]
