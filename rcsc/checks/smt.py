@@ -72,6 +72,7 @@ skips the plan.
 from __future__ import annotations
 
 import contextlib
+import os
 import math
 from dataclasses import dataclass
 from fractions import Fraction
@@ -236,9 +237,18 @@ I64_T = I64  # durations are i64 nanoseconds
 
 
 # z3 terms are hash-consed: `true` and `false` have one id each in a context,
-# and comparing ids is much cheaper than z3.is_true (several foreign calls).
-_TRUE_ID = z3.BoolVal(True).get_id()
-_FALSE_ID = z3.BoolVal(False).get_id()
+# the same in every context (made first, when it is), and comparing ids is
+# much cheaper than z3.is_true (several foreign calls).  They are read from
+# the first context a check makes: making one at import would cost 10 ms
+# of every `rcsc` command that imports the checks.
+_bool_ids: tuple[int, int] | None = None
+
+
+def _true_false_ids(ctx) -> tuple[int, int]:
+    global _bool_ids
+    if _bool_ids is None:
+        _bool_ids = (z3.BoolVal(True, ctx).get_id(), z3.BoolVal(False, ctx).get_id())
+    return _bool_ids
 
 
 @contextlib.contextmanager
@@ -308,9 +318,13 @@ def _keep_solver_memory() -> None:
     global _allocator_tuned
     _allocator_tuned = True
     import ctypes
-    import platform
 
-    if platform.system() != "Linux" or platform.libc_ver()[0] != "glibc":
+    try:
+        # glibc answers this; other C libraries do not know the name.
+        libc = os.confstr("CS_GNU_LIBC_VERSION") or ""
+    except (ValueError, OSError):
+        return
+    if not libc.startswith("glibc"):
         return
     mallopt = getattr(ctypes.CDLL(None), "mallopt", None)
     if mallopt is None:
@@ -326,11 +340,11 @@ _open_encoders: list[list["Encoder"]] = []
 
 
 def _is_true(x) -> bool:
-    return x.get_id() == _TRUE_ID
+    return x.get_id() == (_bool_ids or _true_false_ids(x.ctx))[0]
 
 
 def _is_false(x) -> bool:
-    return x.get_id() == _FALSE_ID
+    return x.get_id() == (_bool_ids or _true_false_ids(x.ctx))[1]
 
 
 def _mk_bool(mk, xs):
