@@ -7,31 +7,32 @@ turns it into the checked design model of `rcsc.semantics.model`.  Nodes have sl
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 
+from rcsc.front.fields import Fields, node
 from rcsc.front.source import Span
 
 
-class _Slots:
+class _Slots(Fields):
     """The root of the node classes: a slot for the nesting depth the parser
     records on expressions and statements (see `rcsc.front.parse.MAX_NESTING`)."""
 
     __slots__ = ("depth",)
 
 
-@dataclass(slots=True)
+@node
 class Node(_Slots):
     span: Span
 
 
-@dataclass(slots=True)
+@node
 class DocComment(Node):
     """The `///` lines before an item (rcsc.front.doccomment), without the slashes."""
 
     text: str
 
 
-@dataclass(slots=True)
+@node
 class Ident(Node):
     """A name together with the span of just that name."""
 
@@ -41,56 +42,56 @@ class Ident(Node):
 # ---- expressions -------------------------------------------------------------
 
 
-@dataclass(slots=True)
+@node
 class Expr(Node):
     pass
 
 
-@dataclass(slots=True)
+@node
 class IntLit(Expr):
     value: int
 
 
-@dataclass(slots=True)
+@node
 class FloatLit(Expr):
     value: float
 
 
-@dataclass(slots=True)
+@node
 class BoolLit(Expr):
     value: bool
 
 
-@dataclass(slots=True)
+@node
 class DurationLit(Expr):
     nanos: int
     text: str
 
 
-@dataclass(slots=True)
+@node
 class Name(Expr):
     name: str
 
 
-@dataclass(slots=True)
+@node
 class Attr(Expr):
     obj: Expr
     attr: Ident
 
 
-@dataclass(slots=True)
+@node
 class Arg(Node):
     name: Ident | None
     value: Expr
 
 
-@dataclass(slots=True)
+@node
 class Call(Expr):
     func: Ident
     args: list[Arg]
 
 
-@dataclass(slots=True)
+@node
 class Index(Expr):
     """`obj[index]`: an element of a fixed-size array."""
 
@@ -98,14 +99,14 @@ class Index(Expr):
     index: Expr
 
 
-@dataclass(slots=True)
+@node
 class ArrayLit(Expr):
     """`[a, b, c]`."""
 
     items: list[Expr]
 
 
-@dataclass(slots=True)
+@node
 class ArrayRepeat(Expr):
     """`[value; count]`: `count` copies of `value`."""
 
@@ -113,13 +114,13 @@ class ArrayRepeat(Expr):
     count: Expr
 
 
-@dataclass(slots=True)
+@node
 class Unary(Expr):
     op: str  # "-" or "not"
     operand: Expr
 
 
-@dataclass(slots=True)
+@node
 class Binary(Expr):
     op: str  # + - * / % == != < <= > >= and or
     left: Expr
@@ -127,7 +128,7 @@ class Binary(Expr):
     op_span: Span
 
 
-@dataclass(slots=True)
+@node
 class IfExpr(Expr):
     cond: Expr
     then: Expr
@@ -137,12 +138,12 @@ class IfExpr(Expr):
 # ---- statements and jobs -------------------------------------------------------
 
 
-@dataclass(slots=True)
+@node
 class Stmt(Node):
     pass
 
 
-@dataclass(slots=True)
+@node
 class Assign(Stmt):
     target: list[Ident]  # a.b.c
     op: str  # = += -= *=
@@ -150,24 +151,24 @@ class Assign(Stmt):
     index: Expr | None = None  # `a.b[i] = v`: the element of the array `a.b`
 
 
-@dataclass(slots=True)
+@node
 class CallStmt(Stmt):
     call: Call
 
 
-@dataclass(slots=True)
+@node
 class Command(Stmt):
     sub: Ident
     verb: Ident
     args: list[Arg]
 
 
-@dataclass(slots=True)
+@node
 class Report(Stmt):
     status: Ident
 
 
-@dataclass(slots=True)
+@node
 class If(Stmt):
     branches: list[tuple[Expr, list[Stmt]]]
     else_body: list[Stmt] | None
@@ -176,7 +177,7 @@ class If(Stmt):
 # ---- declarations --------------------------------------------------------------
 
 
-@dataclass(slots=True)
+@node
 class TypeRef(Node):
     name: Ident  # `[T; N]`: the span of the whole type, name "[]"
     lo: Expr | None = None
@@ -185,20 +186,20 @@ class TypeRef(Node):
     size: Expr | None = None  # `[T; N]`: N
 
 
-@dataclass(slots=True)
+@node
 class Param(Node):
     name: Ident
     type: TypeRef
     doc: DocComment | None = None
 
 
-@dataclass(slots=True)
+@node
 class Import(Node):
     target: str  # "std.math" or a relative path
     is_file: bool
 
 
-@dataclass(slots=True)
+@node
 class Const(Node):
     name: Ident
     type: TypeRef
@@ -206,21 +207,21 @@ class Const(Node):
     doc: DocComment | None = None
 
 
-@dataclass(slots=True)
+@node
 class Enum(Node):
     name: Ident
     members: list[Ident]
     doc: DocComment | None = None
 
 
-@dataclass(slots=True)
+@node
 class Record(Node):
     name: Ident
     fields: list[Param]
     doc: DocComment | None = None
 
 
-@dataclass(slots=True)
+@node
 class GmVar(Node):
     name: Ident
     type: TypeRef
@@ -230,7 +231,7 @@ class GmVar(Node):
     doc: DocComment | None = None
 
 
-@dataclass(slots=True)
+@node
 class Function(Node):
     name: Ident
     params: list[Param]
@@ -239,7 +240,7 @@ class Function(Node):
     doc: DocComment | None = None
 
 
-@dataclass(slots=True)
+@node
 class Extern(Node):
     name: Ident
     params: list[Param]
@@ -248,34 +249,34 @@ class Extern(Node):
     doc: DocComment | None = None
 
 
-@dataclass(slots=True)
+@node
 class Verb(Node):
     name: Ident
     params: list[Param]
     doc: DocComment | None = None
 
 
-@dataclass(slots=True)
+@node
 class VerbSet(Node):
     name: Ident
     verbs: list[Verb]
     doc: DocComment | None = None
 
 
-@dataclass(slots=True)
+@node
 class StatePat(Node):
     kind: str  # "new", "any", "named"
     name: str | None = None
 
 
-@dataclass(slots=True)
+@node
 class NextState(Node):
     kind: str  # "named", "done", "error", "same", "new"
     name: str | None = None
     code: Expr | None = None
 
 
-@dataclass(slots=True)
+@node
 class Rule(Node):
     label: Ident
     guard: Expr | None  # None: the `otherwise` rule of its state
@@ -286,7 +287,7 @@ class Rule(Node):
     doc: DocComment | None = None
 
 
-@dataclass(slots=True)
+@node
 class Plan(Node):
     name: Ident
     continuous: bool
@@ -295,7 +296,7 @@ class Plan(Node):
     doc: DocComment | None = None
 
 
-@dataclass(slots=True)
+@node
 class Decl(Node):
     """A named, typed member of a controller (status field or local)."""
 
@@ -305,12 +306,12 @@ class Decl(Node):
     doc: DocComment | None = None
 
 
-@dataclass(slots=True)
+@node
 class NameList(Node):
     names: list[Ident]
 
 
-@dataclass(slots=True)
+@node
 class Controller(Node):
     name: Ident
     simulator: bool
@@ -342,7 +343,7 @@ class Controller(Node):
 # ---- controller types and function blocks (instantiated by rcsc.front.instantiate) ----
 
 
-@dataclass(slots=True)
+@node
 class TypeParam(Node):
     """A parameter of a controller type: a compile-time constant (`max: f64`)
     or, with `type` None, a Global Memory binding (`cmd_out: gm`)."""
@@ -351,7 +352,7 @@ class TypeParam(Node):
     type: TypeRef | None
 
 
-@dataclass(slots=True)
+@node
 class ControllerType(Node):
     """`controller type NAME(params) attrs { body }`: `body` is the template
     (a controller named after the type)."""
@@ -361,7 +362,7 @@ class ControllerType(Node):
     body: Controller
 
 
-@dataclass(slots=True)
+@node
 class ControllerInstance(Node):
     """`controller NAME: TYPE(args)`."""
 
@@ -371,7 +372,7 @@ class ControllerInstance(Node):
     args: list[Arg]
 
 
-@dataclass(slots=True)
+@node
 class BlockUse(Node):
     """`block NAME: TYPE(args)` in a controller: one instance of a function block."""
 
@@ -380,7 +381,7 @@ class BlockUse(Node):
     args: list[Arg]
 
 
-@dataclass(slots=True)
+@node
 class BlockMember(Node):
     """`input NAME: type = init`, `state ...` or `output ...` of a block."""
 
@@ -390,7 +391,7 @@ class BlockMember(Node):
     init: Expr
 
 
-@dataclass(slots=True)
+@node
 class BlockType(Node):
     """`block NAME(params) { members; step { ... } }`: a function block."""
 
@@ -400,7 +401,7 @@ class BlockType(Node):
     steps: list[tuple[Span, list[Stmt]]]
 
 
-@dataclass(slots=True)
+@node
 class Cpu(Node):
     name: Ident
     heartbeat: list[DurationLit] = field(default_factory=list)
@@ -409,7 +410,7 @@ class Cpu(Node):
     doc: DocComment | None = None
 
 
-@dataclass(slots=True)
+@node
 class File(Node):
     """One parsed source file: `design NAME` or `module a.b`, then items."""
 

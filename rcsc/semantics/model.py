@@ -17,6 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Union
 
+from rcsc.front.fields import Fields, node
 from rcsc.front.source import Span
 from rcsc.semantics.types import Type
 
@@ -30,20 +31,20 @@ Value = Union[bool, int, float, str, dict, list]  # enums are member names; reco
 # ---- expressions -------------------------------------------------------------
 
 
-class _Compiled:
+class _Compiled(Fields):
     """The root of the expression classes: a slot where `rcsc.semantics.evaluate` keeps
     an expression's compiled closure, and one where `walk_expr` keeps its walk."""
 
     __slots__ = ("_compiled", "_walk")
 
 
-@dataclass(slots=True)
+@node
 class Expr(_Compiled):
     span: Span
     type: Type
 
 
-@dataclass(slots=True)
+@node
 class Const(Expr):
     """A literal or a folded constant expression. `name` keeps a constant's name for readable code."""
 
@@ -51,7 +52,7 @@ class Const(Expr):
     name: str | None = None
 
 
-@dataclass(slots=True)
+@node
 class Ref(Expr):
     """A named value. kind: gm | local | status | param | arg (function argument)."""
 
@@ -59,18 +60,18 @@ class Ref(Expr):
     name: str
 
 
-@dataclass(slots=True)
+@node
 class InState(Expr):
     """Time since the plan entered its current state (a duration)."""
 
 
-@dataclass(slots=True)
+@node
 class Cycle(Expr):
     """`cycle`: the number of the controller's current step, counted from 1
     (an i64; with `period`, one step every `divider` cycles of its CPU)."""
 
 
-@dataclass(slots=True)
+@node
 class Age(Expr):
     """`age(V)` of a Global Memory variable V: the reader's release instant minus
     the instant the value it read became visible (a duration).
@@ -81,7 +82,7 @@ class Age(Expr):
     name: str
 
 
-@dataclass(slots=True)
+@node
 class SubView(Expr):
     """The supervisor's view of a subordinate's status buffer.
 
@@ -94,13 +95,13 @@ class SubView(Expr):
     value: str | None = None
 
 
-@dataclass(slots=True)
+@node
 class Field(Expr):
     obj: Expr
     name: str
 
 
-@dataclass(slots=True)
+@node
 class Call(Expr):
     """kind: fn | extern | builtin (abs/min/max) | convert (i32/i64/u32/f64) | record."""
 
@@ -109,7 +110,7 @@ class Call(Expr):
     args: list[Expr]
 
 
-@dataclass(slots=True)
+@node
 class Index(Expr):
     """`obj[index]`: an element of an array; out of range it is the element type's zero."""
 
@@ -117,27 +118,27 @@ class Index(Expr):
     index: Expr
 
 
-@dataclass(slots=True)
+@node
 class ArrayLit(Expr):
     """`[a, b, c]` with an element that is not constant (constant ones fold to a Const list)."""
 
     items: list[Expr]
 
 
-@dataclass(slots=True)
+@node
 class Unary(Expr):
     op: str  # "-" or "not"
     operand: Expr
 
 
-@dataclass(slots=True)
+@node
 class Binary(Expr):
     op: str  # + - * / % == != < <= > >= and or
     left: Expr
     right: Expr
 
 
-@dataclass(slots=True)
+@node
 class IfExpr(Expr):
     cond: Expr
     then: Expr
@@ -147,13 +148,13 @@ class IfExpr(Expr):
 # ---- statements and jobs -------------------------------------------------------
 
 
-@dataclass(slots=True)
-class Stmt:
+@node
+class Stmt(Fields):
     span: Span
 
 
-@dataclass(slots=True)
-class LValue:
+@node
+class LValue(Fields):
     span: Span
     kind: str  # gm | local | status
     name: str
@@ -162,19 +163,19 @@ class LValue:
     index: Expr | None = None  # `a[i] = v`: the element i of the array at `path` (ignored out of range)
 
 
-@dataclass(slots=True)
+@node
 class Assign(Stmt):
     target: LValue
     op: str  # = += -= *=
     value: Expr
 
 
-@dataclass(slots=True)
+@node
 class CallStmt(Stmt):
     call: Call
 
 
-@dataclass(slots=True)
+@node
 class Command(Stmt):
     sub: str
     verb: str
@@ -182,12 +183,12 @@ class Command(Stmt):
     sub_span: Span = None  # type: ignore[assignment]
 
 
-@dataclass(slots=True)
+@node
 class Report(Stmt):
     status: str
 
 
-@dataclass(slots=True)
+@node
 class If(Stmt):
     branches: list[tuple[Expr, list[Stmt]]]
     else_body: list[Stmt]
@@ -196,14 +197,14 @@ class If(Stmt):
 # ---- declarations --------------------------------------------------------------
 
 
-@dataclass
-class Range:
+@dataclass(repr=False, eq=False)
+class Range(Fields):
     lo: int | float
     hi: int | float
 
 
-@dataclass
-class Var:
+@dataclass(repr=False, eq=False)
+class Var(Fields):
     """A typed, initialised variable: GM variable, local, status field, parameter."""
 
     name: str
@@ -216,8 +217,8 @@ class Var:
     doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
 
 
-@dataclass
-class ConstDef:
+@dataclass(repr=False, eq=False)
+class ConstDef(Fields):
     name: str
     type: Type
     value: Value
@@ -225,8 +226,8 @@ class ConstDef:
     doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
 
 
-@dataclass
-class Function:
+@dataclass(repr=False, eq=False)
+class Function(Fields):
     name: str
     params: list[Var]
     ret: Type
@@ -238,8 +239,8 @@ class Function:
     doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
 
 
-@dataclass
-class Verb:
+@dataclass(repr=False, eq=False)
+class Verb(Fields):
     name: str
     params: list[Var]
     span: Span
@@ -251,8 +252,8 @@ class Verb:
         return next((p for p in self.params if p.name == name), None)
 
 
-@dataclass
-class StateRef:
+@dataclass(repr=False, eq=False)
+class StateRef(Fields):
     """`new`, `*` (any) or a named state; as a next state also done/error/same."""
 
     kind: str  # new | any | named | done | error | same
@@ -266,8 +267,8 @@ class StateRef:
         )
 
 
-@dataclass
-class Rule:
+@dataclass(repr=False, eq=False)
+class Rule(Fields):
     index: int  # position in the plan, from 0
     label: str
     span: Span
@@ -288,8 +289,8 @@ class Rule:
         return self.span.line
 
 
-@dataclass
-class Plan:
+@dataclass(repr=False, eq=False)
+class Plan(Fields):
     verb: str
     span: Span
     name_span: Span
@@ -311,8 +312,8 @@ class Plan:
         return list(seen)
 
 
-@dataclass
-class NameUse:
+@dataclass(repr=False, eq=False)
+class NameUse(Fields):
     name: str
     span: Span
 
@@ -358,8 +359,8 @@ def checked_controllers(design: "Design") -> list["Controller"]:
     return [c for c in design.controllers.values() if type(c.plans) is not ElidedPlans]
 
 
-@dataclass
-class Controller:
+@dataclass(repr=False, eq=False)
+class Controller(Fields):
     name: str
     span: Span
     name_span: Span
@@ -391,8 +392,8 @@ class Controller:
     doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
 
 
-@dataclass
-class Crossing:
+@dataclass(repr=False, eq=False)
+class Crossing(Fields):
     """A buffer written on one CPU and read on others (each reader keeps its own copy).
 
     kind: gm (a Global Memory variable), cmd (the command buffer of controller
@@ -406,8 +407,8 @@ class Crossing:
     reader_cpus: list[str]
 
 
-@dataclass
-class Cpu:
+@dataclass(repr=False, eq=False)
+class Cpu(Fields):
     name: str
     span: Span
     name_span: Span
@@ -418,8 +419,8 @@ class Cpu:
     doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
 
 
-@dataclass
-class Design:
+@dataclass(repr=False, eq=False)
+class Design(Fields):
     name: str
     span: Span
     enums: dict[str, Type] = field(default_factory=dict)
