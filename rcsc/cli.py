@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import traceback
 from collections.abc import Callable
 from dataclasses import dataclass
 from types import ModuleType
@@ -1130,5 +1129,7 @@ def main(argv: list[str] | None = None) -> int:
         _error(f"internal compiler error: {type(exc).__name__}: {exc}")
         _write(sys.stderr, "note: this is a bug in rcsc; please report it with the input that caused it\n")
         if os.environ.get("RCSC_BACKTRACE"):
+            import traceback
+
             traceback.print_exc(file=sys.stderr)
         return EXIT_USAGE

@@ -39,7 +39,8 @@ _UNSTORABLE_CODES = frozenset(("E0003",))
 
 
 # The last texts digested (the same objects) and their digests: a re-check
-# digests its root text when it compares, and again when it stores.
+# digests its root text when it compares, and again when it stores, with
+# the files it imports (two of the standard library's, often) in between.
 _sha_memo: list[tuple[str, str]] = []
 
 
@@ -50,7 +51,7 @@ def _sha(text: str) -> str:
         if seen is text or (len(seen) == len(text) and seen == text):
             return sha
     sha = hashlib.sha256(text.encode("utf-8", "surrogatepass")).hexdigest()
-    _sha_memo[:] = [(text, sha)] + _sha_memo[:1]
+    _sha_memo[:] = [(text, sha)] + _sha_memo[:3]
     return sha
 
 
