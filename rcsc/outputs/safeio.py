@@ -68,8 +68,12 @@ def read_input(path: str, limit: int = MAX_INPUT) -> bytes:
         if st.st_size > limit:
             raise InputError(f"`{path}` is {st.st_size} bytes; the limit is {limit} bytes")
         chunks, size = [], 0
+        # One read of the whole file (its size and one byte more, to see
+        # that it ended) saves copying the chunks of a large design together.
+        want = st.st_size + 1
         while True:
-            chunk = os.read(fd, 1 << 20)
+            chunk = os.read(fd, want)
+            want = 1 << 20
             if not chunk:
                 break
             size += len(chunk)
