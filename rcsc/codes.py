@@ -43,7 +43,8 @@ The text contains a character that is not part of the language, or a string
 """),
     ("E0003", _E, "cannot read imported file", """
 An `import "path.rcs"` names a file that does not exist or cannot be read. Paths
-are relative to the folder of the file that imports them.
+are relative to the folder of the file that imports them. No file name holds a
+NUL character: a path with one is refused here too.
 """),
     ("E0004", _E, "import outside the design folder", """
 A local import must stay inside the design's own folder (the folder of the file

@@ -286,8 +286,8 @@ def _group_marks(d: Diagnostic) -> list[tuple[SourceFile, Span, dict[int, list[_
     """
     spans: list[tuple[Span, bool, str]] = []
     if d.span is not None:
-        spans.append((d.span, True, d.label))
-    spans.extend((label.span, False, label.message) for label in d.labels)
+        spans.append((d.span, True, escape_controls(d.label)))
+    spans.extend((label.span, False, escape_controls(label.message)) for label in d.labels)
     groups: list[tuple[SourceFile, Span, dict[int, list[_Mark]]]] = []
     for span, primary, message in spans:
         group = next((g for g in groups if g[0] is span.file), None)
@@ -316,7 +316,9 @@ def _shown_lines(lines: list[int]) -> list[int | None]:
 
 def _render_one(d: Diagnostic, paint: _Painter) -> list[str]:
     severity_style = _SEVERITY_STYLE.get(d.severity, (_BOLD,))
-    out = [paint(_title(d), severity_style) + paint(f": {d.message}", (_BOLD,))]
+    # What a finding says can quote the input (a name, an import path):
+    # escaped, so that it cannot drive the terminal.
+    out = [paint(_title(d), severity_style) + paint(f": {escape_controls(d.message)}", (_BOLD,))]
 
     groups = _group_marks(d)
     shown = [(file, span, _shown_lines(list(marks)), marks) for file, span, marks in groups]
@@ -328,7 +330,7 @@ def _render_one(d: Diagnostic, paint: _Painter) -> list[str]:
     for index, (file, span, lines, marks) in enumerate(shown):
         if index > 0:
             out.append(empty_gutter)
-        out.append(pad + paint("-->", _GUTTER) + f" {file.path}:{span.line}:{span.col}")
+        out.append(pad + paint("-->", _GUTTER) + f" {escape_controls(file.path)}:{span.line}:{span.col}")
         out.append(empty_gutter)
         for line in lines:
             if line is None:
@@ -346,7 +348,7 @@ def _render_one(d: Diagnostic, paint: _Painter) -> list[str]:
         for kind, text in extras:
             head = f"= {kind}: "
             # Continuation lines of a long note line up under its first word.
-            body = text.replace("\n", "\n" + pad + " " + " " * len(head))
+            body = escape_controls(text).replace("\n", "\n" + pad + " " + " " * len(head))
             out.append(pad + " " + paint("=", _GUTTER) + paint(f" {kind}", (_BOLD,)) + f": {body}")
     return out
 
@@ -385,9 +387,9 @@ def render_short(diags: Diagnostics | Iterable[Diagnostic]) -> str:
     """One `file:line:col: severity[CODE]: message` line per finding."""
     lines = []
     for d in _ordered(diags):
-        where = f"{d.span.file.path}:{d.span.line}:{d.span.col}" if d.span else "rcsc"
+        where = f"{escape_controls(d.span.file.path)}:{d.span.line}:{d.span.col}" if d.span else "rcsc"
         # One finding is one line, whatever its message holds.
-        message = " ".join(d.message.splitlines())
+        message = escape_controls(" ".join(d.message.splitlines()))
         lines.append(f"{where}: {_title(d)}: {message}")
     return "".join(line + "\n" for line in lines)
 

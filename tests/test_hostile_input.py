@@ -113,3 +113,26 @@ def test_graph_refuses_an_output_name_it_cannot_write(tmp_path: Path, capsys) ->
     assert not target.exists()
     assert main(["graph", str(SUBMARINE), "-o", str(target), "--format", "dot"]) == 0
     assert target.read_text().startswith("//")
+
+
+def test_nul_in_an_import_path_is_a_finding_not_a_crash(tmp_path: Path, capsys) -> None:
+    """The front-end fuzzer's find: the system's path functions refuse a NUL
+    (`ValueError: embedded null byte`), which ended in an internal error."""
+    design = tmp_path / "d.rcs"
+    design.write_bytes(DESIGN.replace("const SPEED", 'import "a\0b.rcs"\n\nconst SPEED').encode())
+    assert main(["check", str(design)]) == 1
+    out = capsys.readouterr().out
+    assert "error[E0003]: cannot read the imported file: its path holds a NUL character" in out
+    assert "internal" not in out and "\0" not in out
+
+
+@pytest.mark.parametrize("fmt", ["human", "short"])
+def test_control_characters_quoted_in_a_finding_are_escaped(tmp_path: Path, capsys, fmt: str) -> None:
+    """An import path that holds an escape sequence is quoted in the finding's
+    message: shown as `\\x1b`, so that it cannot drive the terminal."""
+    design = tmp_path / "d.rcs"
+    design.write_bytes(DESIGN.replace("const SPEED", 'import "a\x1b[2Jb.rcs"\n\nconst SPEED').encode())
+    assert main(["check", str(design), "--format", fmt]) == 1
+    out = capsys.readouterr().out
+    assert "cannot read `a\\x1b[2Jb.rcs`" in out
+    assert "\x1b" not in out

@@ -115,6 +115,10 @@ def path_to_files(
                 "import files by a path relative to the importing file, inside the design folder"
             )
             return
+        if "\0" in target:
+            # No file name holds a NUL; the system's path functions refuse one.
+            diags.add("E0003", _target_span(item), "cannot read the imported file: its path holds a NUL character", "NUL character in the path")
+            return
         real = os.path.realpath(os.path.join(os.path.dirname(importer_real), target))
         if os.path.commonpath([real, root_dir]) != root_dir:
             diags.add("E0004", _target_span(item), f"import of `{target}` leaves the design folder", "outside the design folder").with_note(
