@@ -290,3 +290,18 @@ def test_an_edit_inside_a_plan_is_rechecked_in_part(client: Client, tmp_path: Pa
     hover = client.request("textDocument/hover", {"textDocument": {"uri": uri}, "position": position})
     assert hover is not None and "count" in hover["contents"]["value"]
     assert client.close() == 0
+
+
+def test_a_document_whose_path_holds_a_nul_does_not_stop_the_others(client: Client, tmp_path: Path) -> None:
+    """No file has a NUL in its path, but a client can send one (`%00`): the
+    system's path functions refuse it.  That document gets a finding saying
+    so, and the other documents are still checked (their check reads every
+    open document)."""
+    bad = _uri(tmp_path / "a.rcs").replace("a.rcs", "a%00b.rcs")
+    client.notify("textDocument/didOpen", {"textDocument": {"uri": bad, "languageId": "rcs", "version": 1, "text": DESIGN}})
+    found = client.diagnostics(bad)
+    assert [d["message"] for d in found] == ["the document's path holds a NUL character: no file can have it, so it is not checked"]
+    path = tmp_path / "d.rcs"
+    uri = _open(client, path, DESIGN.replace("speed > 2.0", "sped > 2.0"))
+    assert any(d.get("code") == "E0100" for d in client.diagnostics(uri))
+    assert client.close() == 0

@@ -123,7 +123,8 @@ class RcsServer(LanguageServer):
         out = {}
         for uri, doc in self.workspace.text_documents.items():
             path = uri_to_path(uri)
-            out[os.path.realpath(path)] = doc.source
+            if "\0" not in path:  # no file has such a path (`check` says so)
+                out[os.path.realpath(path)] = doc.source
         return out
 
     def check(self, uri: str) -> list[lsp.Diagnostic]:
@@ -132,6 +133,13 @@ class RcsServer(LanguageServer):
 
         path = uri_to_path(uri)
         doc = self.workspace.get_text_document(uri)
+        if "\0" in path:
+            # The system's path functions refuse a NUL, and no file has one.
+            diag = lsp.Diagnostic(range=lsp.Range(start=lsp.Position(line=0, character=0), end=lsp.Position(line=0, character=0)),
+                                  message="the document's path holds a NUL character: no file can have it, so it is not checked",
+                                  severity=lsp.DiagnosticSeverity.Error, source="rcsc")
+            self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri=uri, diagnostics=[diag], version=doc.version))
+            return [diag]
         overlay = self.overlay()
         real = os.path.realpath(path)
         root, as_module = path, False
