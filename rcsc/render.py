@@ -159,6 +159,10 @@ def escape_controls(text: str) -> str:
     control character (C0, DEL, C1) and every bidirectional control shown as
     a visible escape (`\\x1b`, `\\u202e`), so input cannot drive the terminal
     (clear the screen, hide a line) or reorder what is shown."""
+    if text.isprintable():
+        # No control or format character (bidirectional controls are format
+        # characters): the common case, answered in C.
+        return text
     out = []
     for ch in text:
         if ch in "\n\t" or not (unicodedata.category(ch) == "Cc" or ch in BIDI_CONTROLS):

@@ -227,3 +227,17 @@ def test_json_survives_odd_data() -> None:
     d.data = {1: Fraction(3, 2), "inf": float("inf"), "sev": Severity.ERROR, "t": (1, 2)}
     doc = json.loads(render_json([d], VERSION))
     assert doc["diagnostics"][0]["data"] == {"1": "3/2", "inf": "inf", "sev": "error", "t": [1, 2]}
+
+
+def test_escape_controls_fast_path_misses_no_control_character() -> None:
+    """`escape_controls` returns a printable text as it is: that is safe only
+    while every character it escapes is one `str.isprintable` refuses."""
+    import unicodedata
+
+    from rcsc.front.source import BIDI_CONTROLS
+    from rcsc.render import escape_controls
+
+    escaped = [chr(c) for c in range(0x110000) if unicodedata.category(chr(c)) == "Cc"] + sorted(BIDI_CONTROLS)
+    assert not any(ch.isprintable() for ch in escaped)
+    assert escape_controls("plain text, é, 日本") == "plain text, é, 日本"
+    assert escape_controls("a\x1b[2Jb\u202ec\td\n") == "a\\x1b[2Jb\\u202ec\td\n"
