@@ -16,17 +16,11 @@ GOLDEN = TESTS / "golden"
 # ---------------------------------------------------------------------------
 
 def pytest_configure(config: pytest.Config) -> None:
-    # For the whole run, module fixtures included (they run before the
-    # function fixture below): a fixture that builds a test design would
-    # otherwise leave `.rcsc-cache/` in tests/.
-    os.environ["RCSC_NO_CACHE"] = "1"
-
-
-@pytest.fixture(autouse=True)
-def _no_disk_cache(monkeypatch):
     """`rcsc check` would write `.rcsc-cache/` next to every design it checks,
-    examples/ included; tests of the cache (test_cache.py) turn it back on."""
-    monkeypatch.setenv("RCSC_NO_CACHE", "1")
+    examples/ and the designs module fixtures build included: off for the
+    whole run.  Tests of the cache turn it back on with `monkeypatch.delenv`,
+    which puts this setting back after them."""
+    os.environ["RCSC_NO_CACHE"] = "1"
 
 
 # ---------------------------------------------------------------------------
