@@ -50,6 +50,9 @@ def test_reachability_and_cycles_agree_with_networkx(pairs: list[tuple[str, str]
         assert graphs.descendants(pred, n) == nx.ancestors(g, n)
         assert graphs.reach(succ, n) == nx.descendants(g, n) | ({n} if any(n in c for c in nx.simple_cycles(g)) else set())
     assert graphs.has_cycle(succ) == (not nx.is_directed_acyclic_graph(g))
+    found = graphs.cycles(succ)
+    assert sorted(map(tuple, found)) == sorted(map(tuple, nx.simple_cycles(g)))
+    assert [sorted(c) for c in found] == sorted(sorted(c) for c in found)
 
 
 _PROBE = """

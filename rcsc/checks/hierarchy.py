@@ -26,17 +26,6 @@ def command_graph(design: Design) -> dict[str, dict[str, None]]:
     return g
 
 
-def _cycles(g: dict[str, dict[str, None]]) -> list[list[str]]:
-    """The simple cycles of the command graph `g`, each as the controllers along it."""
-    if not graphs.has_cycle(g):
-        return []
-    nx = graphs.networkx()
-    graph = nx.DiGraph()
-    graph.add_nodes_from(g)
-    graph.add_edges_from((a, b) for a, bs in g.items() for b in bs)
-    return sorted(nx.simple_cycles(graph), key=lambda cy: sorted(cy))
-
-
 def check(design: Design, diags: Diagnostics) -> None:
     g = command_graph(design)
     ctrls = design.controllers
@@ -60,7 +49,7 @@ def check(design: Design, diags: Diagnostics) -> None:
 
     # Cycles (self-loops were reported above).
     cycle_edges: set[tuple[str, str]] = set()
-    for cycle in _cycles(g):
+    for cycle in graphs.cycles(g):
         if len(cycle) == 1:
             continue
         cycle_edges.update(zip(cycle, cycle[1:] + cycle[:1]))

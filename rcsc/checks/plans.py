@@ -73,12 +73,7 @@ class StateGraph:
 
     def subgraph(self, region: list[str]):
         """The `networkx.DiGraph` of the states in `region` and the edges among them."""
-        nx = graphs.networkx()
-        inside = set(region)
-        sub = nx.DiGraph()
-        sub.add_nodes_from(n for n in self.succ if n in inside)
-        sub.add_edges_from((a, b) for a, bs in self.succ.items() if a in inside for b in bs if b in inside)
-        return sub
+        return graphs.to_networkx(self.succ, set(region))
 
 
 def state_graph(plan: m.Plan) -> StateGraph:

@@ -64,3 +64,22 @@ def networkx():
     import networkx
 
     return networkx
+
+
+def to_networkx(succ: Mapping[str, Iterable[str]], keep: set[str] | None = None):
+    """`succ` as a `networkx.DiGraph`, nodes and edges in `succ`'s order;
+    with `keep`, only those nodes and the edges among them."""
+    nx = networkx()
+    g = nx.DiGraph()
+    g.add_nodes_from(n for n in succ if keep is None or n in keep)
+    g.add_edges_from((a, b) for a, bs in succ.items() if keep is None or a in keep for b in bs if keep is None or b in keep)
+    return g
+
+
+def cycles(succ: Mapping[str, Iterable[str]]) -> list[list[str]]:
+    """The simple cycles of `succ` (a node that leads to itself is one),
+    each as the nodes along it, sorted by their sorted nodes; networkx is
+    imported only when there is one."""
+    if not has_cycle(succ):
+        return []
+    return sorted(networkx().simple_cycles(to_networkx(succ)), key=sorted)

@@ -408,15 +408,7 @@ class _Sema:
             for e in m.walk_expr(fn.body):
                 if isinstance(e, m.Call) and e.kind == "fn":
                     calls[fn.name][e.func] = None
-        if not graphs.has_cycle(calls):
-            return
-        nx = graphs.networkx()
-        graph = nx.DiGraph()
-        for name, callees in calls.items():
-            graph.add_node(name)
-            for callee in callees:
-                graph.add_edge(name, callee)
-        for cycle in sorted(nx.simple_cycles(graph), key=lambda c: sorted(c)):
+        for cycle in graphs.cycles(calls):
             first = min(cycle)
             fn = self.g.functions[first]
             item = self.decls[first]
