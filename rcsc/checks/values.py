@@ -254,11 +254,29 @@ def _array_size(design: Design, c: m.Controller, lv: m.LValue) -> int | None:
     return getattr(t, "size", None)
 
 
-def _needs_solver(e: m.Expr) -> bool:
+_ARITH = frozenset(("+", "-", "*", "/", "%"))
+_NOTHING: tuple = ((), (), ())
+
+
+def _parts(e: m.Expr) -> tuple[list[m.Binary], list[m.Index], list[m.Call]]:
+    """The nodes of `e` that the value questions are about, in walk order: integer
+    arithmetic (W0525), indexes that are not constants (W0251) and records built
+    (W0524 on a ranged field).  One walk for the three checks: most expressions
+    have none of them, and are then done with after this walk."""
+    arith = index = records = None
     for x in m.walk_expr(e):
-        if isinstance(x, m.Binary) and x.op in ("+", "-", "*", "/", "%") and _int_type(x.type) is not None:
-            return True
-    return False
+        if isinstance(x, m.Binary):
+            if x.op in _ARITH and _int_type(x.type) is not None:
+                (arith := arith if arith is not None else []).append(x)
+        elif isinstance(x, m.Index):
+            if not isinstance(x.index, m.Const):
+                (index := index if index is not None else []).append(x)
+        elif isinstance(x, m.Call):
+            if x.kind == "record" and isinstance(x.type, RecordType):
+                (records := records if records is not None else []).append(x)
+    if arith is None and index is None and records is None:
+        return _NOTHING
+    return arith or [], index or [], records or []
 
 
 class _Plan:
@@ -278,9 +296,15 @@ class _Plan:
 
     def run(self) -> None:
         states = [s for s in plan_states(self.plan) if s not in ("done", "error")]
-        rules_in = {s: [r for r in self.plan.rules if s in rule_sources(r, states)] for s in states}
+        # The rules of each state, in order (`rule_sources` gives a state once).
+        rules_in: dict[str, list[m.Rule]] = {s: [] for s in states}
+        sources_of: dict[int, list[str]] = {}
         for r in self.plan.rules:
-            sources = [s for s in rule_sources(r, states) if s in rules_in]
+            sources = sources_of[r.index] = [s for s in rule_sources(r, states) if s in rules_in]
+            for s in sources:
+                rules_in[s].append(r)
+        for r in self.plan.rules:
+            sources = sources_of[r.index]
             if not sources:
                 continue
 
@@ -302,17 +326,22 @@ class _Plan:
                 return [ctx + own for ctx in contexts()]
 
             if r.guard is not None:
-                self._expr_checks(r.guard, contexts, r)
-                self._index_checks(r.guard, contexts, r)
+                arith, index, _ = _parts(r.guard)
+                if arith:
+                    self._expr_checks(r.guard, arith, contexts, r)
+                if index:
+                    self._index_checks(index, contexts, r)
             assigned: set[tuple[str, str]] = set()
             for job in r.jobs:
                 # The job's expressions that read nothing an earlier job of
                 # the rule assigned (`assigned` does not change below until
                 # the job is done, so this is asked once per expression).
-                exprs = [e for e in m.stmt_exprs(job) if not (assigned and _reads(e) & assigned)]
-                for e in exprs:
-                    self._expr_checks(e, fired, r)
-                    self._index_checks(e, fired, r)
+                exprs = [(e, _parts(e)) for e in m.stmt_exprs(job) if not (assigned and _reads(e) & assigned)]
+                for e, (arith, index, _) in exprs:
+                    if arith:
+                        self._expr_checks(e, arith, fired, r)
+                    if index:
+                        self._index_checks(index, fired, r)
                 if (isinstance(job, m.Assign) and job.target.index is not None and not isinstance(job.target.index, m.Const)
                         and not (assigned and _reads(job.target.index) & assigned)):
                     size = _array_size(self.design, self.c, job.target)
@@ -322,8 +351,9 @@ class _Plan:
                     self._command(job, fired, r, assigned)
                 elif isinstance(job, m.Assign):
                     self._assign(job, fired, r, assigned)
-                for e in exprs:
-                    self._records(e, fired, r, assigned)
+                for e, (_, _, records) in exprs:
+                    if records:
+                        self._records(records, fired, r, assigned)
                 assigned |= _assigned_names(job)
 
     # ---- questions ----
@@ -389,11 +419,11 @@ class _Plan:
             out[inp.name] = value if not isinstance(value, float) or value == value else "NaN"
         return ", ".join(parts), out
 
-    def _index_checks(self, e: m.Expr, contexts: list[list], r: m.Rule) -> None:
-        for x in m.walk_expr(e):
-            if isinstance(x, m.Index) and not isinstance(x.index, m.Const):
-                size = x.obj.type.size  # type: ignore[attr-defined]
-                self._index_check(x.index, size, x.index.span, [], contexts, r, False)
+    def _index_checks(self, indexes: list[m.Index], contexts: list[list], r: m.Rule) -> None:
+        """W0251 for each index that is not a constant (`_parts`) of an expression."""
+        for x in indexes:
+            size = x.obj.type.size  # type: ignore[attr-defined]
+            self._index_check(x.index, size, x.index.span, [], contexts, r, False)
 
     def _index_check(self, index: m.Expr, size: int, span: Span, exprs: list[m.Expr], contexts: list[list], r: m.Rule, writing: bool) -> None:
         """W0251: can `index` be outside 0..size-1 where rule `r` runs?"""
@@ -419,12 +449,9 @@ class _Plan:
         d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data, "state": self.where[self.hit][0],
                   "size": size}
 
-    def _expr_checks(self, e: m.Expr, contexts: list[list], r: m.Rule) -> None:
-        if not _needs_solver(e):
-            return
-        for x in m.walk_expr(e):
-            if not isinstance(x, m.Binary) or x.op not in ("+", "-", "*", "/", "%"):
-                continue
+    def _expr_checks(self, e: m.Expr, arith: list[m.Binary], contexts: list[list], r: m.Rule) -> None:
+        """W0525 for each integer operation (`_parts`) of the expression `e`."""
+        for x in arith:
             it = _int_type(x.type)
             if it is None or (x.span.start, x.op) in self.reported:
                 continue
@@ -567,12 +594,11 @@ class _Plan:
         for p, arg in zip(verb.params, cmd.args):
             self._slot(arg, p.range, p.type, f"argument `{p.name}` of `{cmd.sub}.{cmd.verb}`", contexts, r, assigned)
 
-    def _records(self, e: m.Expr, contexts, r: m.Rule, assigned) -> None:
-        """Each argument of a record built in `e` (`Spec(rpm = x)`) that goes into a ranged field."""
-        for x in m.walk_expr(e):
-            if isinstance(x, m.Call) and x.kind == "record" and isinstance(x.type, RecordType):
-                for (fname, ftype), arg in zip(x.type.fields, x.args):
-                    self._slot(arg, x.type.field_range(fname), ftype, f"field `{fname}` of `{x.type.name}`", contexts, r, assigned)
+    def _records(self, records: list[m.Call], contexts, r: m.Rule, assigned) -> None:
+        """Each argument of a record built (`Spec(rpm = x)`, `_parts`) that goes into a ranged field."""
+        for x in records:
+            for (fname, ftype), arg in zip(x.type.fields, x.args):  # type: ignore[attr-defined]
+                self._slot(arg, x.type.field_range(fname), ftype, f"field `{fname}` of `{x.type.name}`", contexts, r, assigned)  # type: ignore[attr-defined]
 
     def _assign(self, job: m.Assign, contexts, r: m.Rule, assigned) -> None:
         if job.target.path:
