@@ -739,6 +739,9 @@ class Checker:
 
     def match_args(self, params, args: list[ast.Arg], call: ast.Node, what: str, hint: Type | None = None) -> list[m.Expr] | None:
         """Match positional then named arguments to `params` [(name, type|None)]."""
+        if len(args) == len(params) and all(a.name is None for a in args):
+            # The common case: every argument given, by position.
+            return self._typed_args(params, list(args), hint)
         slots: list[ast.Arg | None] = [None] * len(params)
         names = [p[0] for p in params]
         ok = True
@@ -774,10 +777,13 @@ class Checker:
             return None
         if not ok:
             return None
+        return self._typed_args(params, slots, hint)  # type: ignore[arg-type]
+
+    def _typed_args(self, params, slots: list[ast.Arg], hint: Type | None) -> list[m.Expr]:
+        """The arguments matched to `params`, in the parameters' order, checked."""
         out: dict[int, m.Expr] = {}
         free = []  # parameters of no fixed type (builtins): their arguments take one type
         for i, ((pname, ptype), a) in enumerate(zip(params, slots)):
-            assert a is not None
             if ptype is None:
                 free.append(i)
             else:
