@@ -112,6 +112,11 @@ class SourceFile:
     path: str
     text: str
     _starts: list[int] | None = field(default=None, init=False, repr=False)
+    # Before the table is made: the lines found by counting (`_probe`), as
+    # sorted (offset of the line's start, line) pairs, and the characters
+    # counted so far.
+    _known: list[tuple[int, int]] | None = field(default=None, init=False, repr=False)
+    _counted: int = field(default=0, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self.text = normalized(self.text)
@@ -134,14 +139,53 @@ class SourceFile:
     def line_col(self, offset: int) -> tuple[int, int]:
         """1-based (line, column) of a character offset."""
         offset = max(0, min(offset, len(self.text)))
+        if self._starts is None and len(self.text) > _REUSE_ABOVE:
+            found = self._probe(offset)
+            if found is not None:
+                return found
         line = bisect.bisect_right(self._line_starts, offset) - 1
         return line + 1, offset - self._line_starts[line] + 1
 
+    def _probe(self, offset: int) -> tuple[int, int] | None:
+        """(line, column) of `offset` without the line table: the line breaks
+        are counted from the nearest line known before it.
+
+        A check that reports a few findings in a large file (a re-check
+        after an edit: a handful, in 5 MB) needs a few lines, and counting
+        up to them costs a fraction of the table's 12 ms.  Once as many
+        characters are counted as the file holds, the table is cheaper and
+        is made instead (None): the counting never costs more than the table.
+        """
+        known = self._known
+        if known is None:
+            known = self._known = [(0, 1)]
+        at = bisect.bisect_right(known, (offset, 1 << 62)) - 1
+        base, line = known[at]
+        if self._counted + (offset - base) > len(self.text):
+            return None
+        self._counted += offset - base
+        text = self.text
+        breaks = text.count("\n", base, offset)
+        if breaks:
+            line += breaks
+            base = text.rfind("\n", base, offset) + 1
+            known.insert(at + 1, (base, line))
+        return line, offset - base + 1
+
+    def _known_start(self, line: int) -> int | None:
+        """The start of `line` if `_probe` found it (the lines of the findings shown)."""
+        known = self._known or []
+        # Each known line is a different line, so their numbers increase with their starts.
+        at = bisect.bisect_left(known, line, key=lambda k: k[1])
+        return known[at][0] if at < len(known) and known[at][1] == line else None
+
     def line_text(self, line: int) -> str:
         """The text of 1-based line `line`, without its newline."""
-        if line < 1 or line > len(self._line_starts):
-            return ""
-        start = self._line_starts[line - 1]
+        start = self._known_start(line) if self._starts is None else None
+        if start is None:
+            if line < 1 or line > len(self._line_starts):
+                return ""
+            start = self._line_starts[line - 1]
         end = self.text.find("\n", start)
         return self.text[start:] if end < 0 else self.text[start:end]
 
