@@ -2,7 +2,7 @@
 
 The hypothesis families of tests/test_fuzz.py draw inputs blindly; this harness
 lets libFuzzer's coverage feedback steer the inputs into the branches the
-random families miss.  Three targets, each with an oracle that can fail:
+random families miss.  Four targets, each with an oracle that can fail:
 
   parsers   the fast parser (rcsc.front.rdparse) against the reference grammar
             (grammar/rcs.lark): the same tree, span for span, and the same
@@ -11,7 +11,10 @@ random families miss.  Three targets, each with an oracle that can fail:
             family with z3): no exception escapes, every finding has a code and
             a span inside the file;
   scenario  a scenario text against the submarine design through the one
-            scenario parser: no exception, every finding has a span inside it.
+            scenario parser: no exception, every finding has a span inside it;
+  fmt       `rcsc fmt` on a text that parses: the formatted text parses to the
+            same tree (spans aside), keeps every comment in order, and
+            formatting it again changes nothing (tests/test_fmt.py's oracle).
 
 The corpus starts from every .rcs (or .scn) file of the repository, and a
 dictionary of the language's keywords and punctuation helps the mutator.
@@ -126,8 +129,10 @@ with atheris.instrument_imports(include=["rcsc", "lark"]):
     from rcsc.front.parse import text_to_ast, text_to_ast_lark
     from rcsc.front.scenario import text_to_scenario
     from rcsc.front.source import SourceFile
+    from rcsc.editor import fmt as _fmt  # noqa: F401  (instrumented before test_fmt imports it)
 
 import test_fastparse  # noqa: E402  (tree_difference and the findings view)
+import test_fmt  # noqa: E402  (the formatter's round-trip oracle)
 import test_fuzz  # noqa: E402  (KEYWORDS and PUNCT of the language)
 
 PLANT_BUG = False
@@ -194,7 +199,19 @@ def fuzz_scenario(data: bytes) -> None:
     _assert_spans(diags)
 
 
-TARGETS = {"parsers": (fuzz_parsers, "*.rcs"), "check": (fuzz_check, "*.rcs"), "scenario": (fuzz_scenario, "*.scn")}
+def fuzz_fmt(data: bytes) -> None:
+    text = _text(data)
+    if text is None:
+        return
+    test_fmt._assert_round_trip(text, "the input")
+
+
+TARGETS = {
+    "parsers": (fuzz_parsers, "*.rcs"),
+    "check": (fuzz_check, "*.rcs"),
+    "scenario": (fuzz_scenario, "*.scn"),
+    "fmt": (fuzz_fmt, "*.rcs"),
+}
 
 
 def _seed_corpus(pattern: str) -> Path:

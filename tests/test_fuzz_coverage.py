@@ -2,7 +2,7 @@
 
 Each target runs a fixed number of inputs from a fixed seed, starting from
 the repository's own files: the fast parser against the reference grammar,
-the whole `rcsc check`, and the scenario parser.  Longer campaigns are the
+the whole `rcsc check`, the scenario parser, and `rcsc fmt`'s round trip.  Longer campaigns are the
 script's job (`python bench/fuzz_front.py TARGET -max_total_time=600`).  A
 planted bug shows that the harness reports what its oracle finds.
 """
@@ -27,7 +27,7 @@ def _fuzz(tmp_path: Path, *argv: str) -> subprocess.CompletedProcess[str]:
                           cwd=tmp_path, capture_output=True, text=True, timeout=600)
 
 
-@pytest.mark.parametrize("target", ["parsers", "check", "scenario"])
+@pytest.mark.parametrize("target", ["parsers", "check", "scenario", "fmt"])
 def test_bounded_fuzz_run_finds_nothing(tmp_path: Path, target: str) -> None:
     proc = _fuzz(tmp_path, target, f"-runs={RUNS}", "-seed=1", "-max_len=4096")
     out = proc.stdout + proc.stderr

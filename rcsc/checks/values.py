@@ -33,6 +33,7 @@ W0251 array index may be out of range
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Sequence
 
 import z3
 
@@ -258,7 +259,7 @@ _ARITH = frozenset(("+", "-", "*", "/", "%"))
 _NOTHING: tuple = ((), (), ())
 
 
-def _parts(e: m.Expr) -> tuple[list[m.Binary], list[m.Index], list[m.Call]]:
+def _parts(e: m.Expr) -> tuple[Sequence[m.Binary], Sequence[m.Index], Sequence[m.Call]]:
     """The nodes of `e` that the value questions are about, in walk order: integer
     arithmetic (W0525), indexes that are not constants (W0251) and records built
     (W0524 on a ranged field).  One walk for the three checks: most expressions
@@ -419,7 +420,7 @@ class _Plan:
             out[inp.name] = value if not isinstance(value, float) or value == value else "NaN"
         return ", ".join(parts), out
 
-    def _index_checks(self, indexes: list[m.Index], contexts: list[list], r: m.Rule) -> None:
+    def _index_checks(self, indexes: Sequence[m.Index], contexts: list[list], r: m.Rule) -> None:
         """W0251 for each index that is not a constant (`_parts`) of an expression."""
         for x in indexes:
             size = x.obj.type.size  # type: ignore[attr-defined]
@@ -449,7 +450,7 @@ class _Plan:
         d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data, "state": self.where[self.hit][0],
                   "size": size}
 
-    def _expr_checks(self, e: m.Expr, arith: list[m.Binary], contexts: list[list], r: m.Rule) -> None:
+    def _expr_checks(self, e: m.Expr, arith: Sequence[m.Binary], contexts: list[list], r: m.Rule) -> None:
         """W0525 for each integer operation (`_parts`) of the expression `e`."""
         for x in arith:
             it = _int_type(x.type)
@@ -594,7 +595,7 @@ class _Plan:
         for p, arg in zip(verb.params, cmd.args):
             self._slot(arg, p.range, p.type, f"argument `{p.name}` of `{cmd.sub}.{cmd.verb}`", contexts, r, assigned)
 
-    def _records(self, records: list[m.Call], contexts, r: m.Rule, assigned) -> None:
+    def _records(self, records: Sequence[m.Call], contexts, r: m.Rule, assigned) -> None:
         """Each argument of a record built (`Spec(rpm = x)`, `_parts`) that goes into a ranged field."""
         for x in records:
             for (fname, ftype), arg in zip(x.type.fields, x.args):  # type: ignore[attr-defined]
