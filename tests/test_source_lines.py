@@ -50,3 +50,15 @@ def test_a_few_lines_of_a_large_file_need_no_table():
     f.line_col(len(text) - 1)
     assert f._starts is not None
     assert f.line_col(at) == (50_001, 6)
+
+
+def test_many_lines_asked_make_the_table():
+    """The lines found by counting are kept in a sorted list: past a
+    thousand of them (lines asked in any order) the table is made."""
+    text = "x\n" * 200_000
+    f = S.SourceFile("many.rcs", text)
+    order = list(range(0, len(text), 2))
+    random.Random(1).shuffle(order)
+    for offset in order[:3000]:
+        assert f.line_col(offset) == (offset // 2 + 1, 1)
+    assert f._starts is not None and len(f._known or ()) <= S._KNOWN_LINES + 1

@@ -80,6 +80,7 @@ def edit_between(old: str, new: str) -> tuple[int, int, int]:
 # 5 MB).
 _last_lines: list = [None, None]
 _REUSE_ABOVE = 1 << 16  # characters; below, a table is made in well under a millisecond
+_KNOWN_LINES = 1024  # lines found by counting (`SourceFile._probe`) before the table is made
 
 
 def _line_starts_of(text: str) -> list[int]:
@@ -155,13 +156,14 @@ class SourceFile:
         up to them costs a fraction of the table's 12 ms.  Once as many
         characters are counted as the file holds, the table is cheaper and
         is made instead (None): the counting never costs more than the table.
+        So is it after `_KNOWN_LINES` lines, which are kept in a sorted list.
         """
         known = self._known
         if known is None:
             known = self._known = [(0, 1)]
         at = bisect.bisect_right(known, (offset, 1 << 62)) - 1
         base, line = known[at]
-        if self._counted + (offset - base) > len(self.text):
+        if self._counted + (offset - base) > len(self.text) or len(known) > _KNOWN_LINES:
             return None
         self._counted += offset - base
         text = self.text
