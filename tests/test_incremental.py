@@ -211,6 +211,10 @@ def checked(tmp_path: Path) -> Path:
     return folder
 
 
+# The controllers the first re-check of the last `_both_ways` checked again.
+_rechecked: list[frozenset] = [frozenset()]
+
+
 def _both_ways(folder: Path) -> tuple[bool, str, str]:
     """Whether the re-check of `folder/d.rcs` is incremental, its report and
     that of a full check with a copy of the same cache."""
@@ -221,6 +225,7 @@ def _both_ways(folder: Path) -> tuple[bool, str, str]:
     try:
         used = incremental.recheck("d.rcs", False, ".rcsc-cache") is not None
         why = incremental.last_miss
+        _rechecked[:] = [incremental.last_rechecked]
     finally:
         os.chdir(cwd)
     os.chdir(copy)
@@ -308,7 +313,9 @@ def test_designs_with_controller_types_are_checked_in_full(tmp_path: Path) -> No
         assert incremental.recheck("d.rcs", False, ".rcsc-cache") is None
     finally:
         os.chdir(cwd)
-    assert incremental.last_miss in ("controller types", "an edited controller's summary changed")
+    # (A controller type lies outside the controllers the scan finds: an
+    # edit of a declaration it names is "the text outside the controllers".)
+    assert incremental.last_miss in ("controller types", "an edited controller's summary changed", "the text outside the controllers changed")
 
 
 def test_random_edits_of_random_designs_give_the_full_report(capsys) -> None:
@@ -475,3 +482,41 @@ def test_a_header_edit_that_changes_a_did_you_mean_elsewhere_is_checked_in_full(
     assert not getattr(result, "partial", False) and incremental.last_miss == "the names a hint can suggest changed"
     helps = [h for d in result.diags.items if d.code == "E0100" for h in d.helps]
     assert ("did you mean `speedlimt`?" in helps) == (then == "speedlimt")
+
+
+@pytest.mark.parametrize(
+    "old, new, rechecked",
+    [
+        # A Global Memory variable that only C3 reads: C3 and its supervisor C0.
+        ("gm c3_raw: f64 = 0.0 from env", "gm c3_raw: f64 in -500.0..500.0 = 0.0 from env", {"C0", "C3"}),
+        # A function every controller's `pre` calls (through `within`'s record type too).
+        ("clamp(x * k, -1000.0, 1000.0)", "clamp(x * k, -900.0, 900.0)", None),
+        ("enum Mode { IDLE, RUN, SERVICE }", "enum Mode { IDLE, RUN, SERVICE, MAINT }", None),
+        ("const MAX_COUNT: i32 = 100", "const MAX_COUNT: i32 = 90", None),
+        # A constant that nothing names: no controller is checked again.
+        ("const GAIN: f64 = 0.5", "const GAIN: f64 = 0.5\nconst UNUSED: i32 = 3", set()),
+    ],
+)
+def test_an_edit_of_a_declaration_rechecks_the_controllers_that_name_it(checked: Path, old: str, new: str, rechecked) -> None:
+    """An edit of declarations outside the controllers checks again the
+    controllers whose text names what changed (and their supervisors);
+    the report is the full check's."""
+    _edit(checked / "d.rcs", old, new)
+    used, why, _ = _both_ways(checked)
+    assert used, why
+    if rechecked is not None:
+        assert _rechecked[0] == rechecked
+
+
+@pytest.mark.parametrize(
+    "old, new",
+    [
+        ("const GAIN: f64 = 0.5", "// tuned by hand\nconst GAIN: f64 = 0.5"),  # a comment outside the controllers
+        ("import std.math\n", "import std.math\nimport std.lifecycle\n"),  # an import
+        ("design synthetic_6_3_6", "design synthetic_six"),  # the design's name
+    ],
+)
+def test_an_edit_outside_the_controllers_and_their_declarations_is_checked_in_full(checked: Path, old: str, new: str) -> None:
+    _edit(checked / "d.rcs", old, new)
+    used, why, _ = _both_ways(checked)
+    assert not used and why == "the text outside the controllers changed"

@@ -8,12 +8,17 @@ this module answers without parsing or checking the other controllers
 again:
 
 1. The root text is cut into its controllers and their plan bodies without
-   parsing (`rcsc.front.items`).  The text outside the controllers (the
-   declarations, the CPUs) and every imported file must be unchanged;
-   otherwise the design is checked in full.
-2. The controllers checked again are those whose text changed and the
-   supervisors of those whose header (the outline: header, verbs, status,
-   locals, `pre`, `post`) changed, since a supervisor's plans command its
+   parsing (`rcsc.front.items`).  Every imported file must be unchanged.
+   Outside the controllers, only declarations (constants, enums, records,
+   Global Memory, functions, externs, verb sets) may have changed: the
+   text between them (the `design` line, imports, CPUs, comments) must be
+   as it was, blanks aside (`rcsc.front.declarations`); otherwise the
+   design is checked in full.
+2. The controllers checked again are those whose text changed, those
+   whose text names what an edited declaration declares (directly or
+   through another declaration), and the supervisors of those whose header
+   (the outline: header, verbs, status, locals, `pre`, `post`) changed or
+   that name an edited declaration, since a supervisor's plans command its
    subordinates' verbs and read their status.  What the rest of the design
    reads of a header -- level, budget, period, kind, subordinates, Global
    Memory (`controller_head`) -- must be as it was.
@@ -34,7 +39,9 @@ again:
 6. The findings are the last check's findings inside the other
    controllers (moved by the length change of the edits before them) and
    this run's findings everywhere else; suppressions (`rcsc: allow`) are
-   applied to the whole again.
+   applied to the whole again.  A last finding of an unchanged controller
+   that points into edited text between the controllers (a label at an
+   edited declaration) has no place in the new text: full check.
 
 In a long-lived process (the language server, `memory_stores`) the
 unchanged controllers are not even parsed again: the syntax tree each one
@@ -56,11 +63,12 @@ from rcsc.checks import cache
 from rcsc.checks import replay as replays
 from rcsc.diagnostics import Diagnostic, Diagnostics
 from rcsc.front import items as it
+from rcsc.front.declarations import changed_names, declarations, gap_digests, mentioning
 from rcsc.front.source import SourceFile, Span, normalized
 from rcsc.outputs import safeio
 
 NAMESPACE = "outline"
-FORMAT = 2
+FORMAT = 3
 # In a long-lived process only (`memory_stores`): the syntax trees of the
 # unchanged controllers, kept from one re-check to the next (`_KeptTree`).
 TREES = "trees"
@@ -141,6 +149,7 @@ def _remember_outline(path: str, as_module: bool, folder: str | None, result, st
         summaries = {item.name: controller_summary(design, design.controllers[item.name]) for item in found}
     except KeyError:
         return  # a controller the scan found and the model does not hold
+    decls = declarations(text, loaded[0].tree.items, found)
     value = {
         "format": FORMAT,
         "root": replays._sha(text),
@@ -151,6 +160,9 @@ def _remember_outline(path: str, as_module: bool, folder: str | None, result, st
         # Needed only by a kept unknown-name finding (`_check`).
         "scope": hints.scope_names_key(design) if any(d.code == "E0100" for d in result.diags.items) else None,
         "values_context": design.values_context,
+        # What an edit of declarations outside the controllers is compared with (`_edited_declarations`).
+        "declarations": None if decls is None else {"frame": decls.frame, "digests": decls.digests},
+        "gaps": gap_digests(text, found),
     }
     target = stores[NAMESPACE] if stores is not None else cache.Store(folder, NAMESPACE)  # type: ignore[arg-type]
     try:
@@ -170,6 +182,8 @@ class _Miss(Exception):
 last_miss = ""
 # How many controllers' kept syntax trees the last `recheck` used (for tests).
 last_kept = 0
+# The controllers the last `recheck` checked again (for tests).
+last_rechecked: frozenset[str] = frozenset()
 
 
 def recheck(path: str, as_module: bool, folder: str | None, stores: dict | None = None, overlay: dict[str, str] | None = None):
@@ -184,8 +198,8 @@ def recheck(path: str, as_module: bool, folder: str | None, stores: dict | None 
     # As in `rcsc.driver.check_path`: no cyclic collection during the run.
     was_enabled = gc.isenabled()
     gc.disable()
-    global last_miss, last_kept
-    last_miss, last_kept = "", 0
+    global last_miss, last_kept, last_rechecked
+    last_miss, last_kept, last_rechecked = "", 0, frozenset()
     try:
         return _recheck(path, as_module, stores if stores is not None else stores_in(folder), overlay or {})  # type: ignore[arg-type]
     except _Miss as miss:
@@ -234,10 +248,12 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
         raise _Miss("the root file is unchanged")
     new_items = it.controller_items(text)
     sums = it.digests(text)
-    if new_items is None or sums is None or sums[0] != outline["rest"]:
+    if new_items is None or sums is None:
         raise _Miss("the text outside the controllers changed")
     if [x.name for x in new_items] != [n for n, *_ in old_items]:
         raise _Miss("controllers added, removed or renamed")
+    # Declarations edited outside the controllers: the names they declare.
+    declared = _edited_declarations(path, text, new_items, outline) if sums[0] != outline["rest"] else set()
     changed: set[str] = set()
     headers: set[str] = set()
     outlines: dict[str, str] = {}
@@ -247,7 +263,13 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
         outlines[name] = new_osha
         if new_bsha != bsha:
             changed.add(name)
-    if not changed and not headers:
+    if declared:
+        # A controller that names what an edited declaration declares is
+        # checked again, as if its header had changed (the declaration can
+        # be the type of a verb's parameter or of a status field, which its
+        # supervisor reads).
+        headers |= mentioning(text, new_items, declared)
+    if not changed and not headers and sums[0] == outline["rest"]:
         raise _Miss("no controller changed")
     heads = outline.get("heads")
     if not isinstance(heads, dict) or any(x.name not in summaries or x.name not in heads for x in new_items):
@@ -261,14 +283,58 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
     supervisors = {name for name, head in heads.items() if isinstance(head, list) and len(head) == 7
                    and isinstance(head[4], list) and any(sub in headers for sub in head[4])}
     rechecked = changed | headers | supervisors
+    global last_rechecked
+    last_rechecked = frozenset(rechecked)
     elided = [x for x in new_items if x.name not in rechecked]
     kept = _kept_trees(stores, key, elided, outlines, sums[0])
     # The parser reads the edited controllers whole, the other controllers
     # with their plan bodies as blanks, and nothing of those whose tree is
     # kept: those are holes in the text, which it reads as blanks.
     holes = [r for x in elided for r in ([(x.start, x.end)] if x.name in kept else [(s, e) for _, s, e in x.bodies])]
+    gaps = _edited_gaps(outline, text, new_items) if sums[0] != outline["rest"] else set()
     return _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, rechecked, summaries, last,
-                  values_context, kept, outlines, sums[0], {name: heads[name] for name in headers}, outline.get("scope"))
+                  None if gaps else values_context, kept, outlines, sums[0], {name: heads[name] for name in headers},
+                  outline.get("scope"), gaps)
+
+
+def _edited_declarations(path: str, text: str, new_items: list, outline: dict) -> set[str]:
+    """The names whose declarations outside the controllers an edit changed
+    (changed, added or removed, and those of the declarations that name
+    them: `rcsc.front.declarations`).  Misses when anything else outside
+    the controllers changed: the `design` line, an import, a CPU, a comment."""
+    from rcsc.front.rdparse import Fallback, parse_fast
+
+    stored = outline.get("declarations")
+    if not isinstance(stored, dict) or not isinstance(stored.get("frame"), str) or not isinstance(stored.get("digests"), dict):
+        raise _Miss("the text outside the controllers changed")
+    # The controllers are holes: only the text outside them is parsed.
+    try:
+        tree, found = parse_fast(SourceFile(path, text), [(x.start, x.end) for x in new_items])
+    except Fallback:
+        raise _Miss("a syntax error") from None
+    if tree is None or found.has_errors():
+        raise _Miss("a syntax error")
+    now = declarations(text, tree.items, new_items)
+    if now is None or now.frame != stored["frame"]:
+        raise _Miss("the text outside the controllers changed")
+    names = changed_names(stored["digests"], now)
+    if not names:
+        raise _Miss("the text outside the controllers changed")
+    if not now.frame_words.isdisjoint(names):
+        # A CPU (or an import) names what changed: its schedule or rate may
+        # depend on it.
+        raise _Miss("the text outside the controllers changed")
+    return names
+
+
+def _edited_gaps(outline: dict, text: str, new_items: list) -> set[int]:
+    """The pieces of text outside the controllers (before each, and after
+    the last: by index) that an edit of declarations changed."""
+    old = outline.get("gaps")
+    now = gap_digests(text, new_items)
+    if not isinstance(old, list) or len(old) != len(now):
+        raise _Miss("a corrupt entry")
+    return {i for i, (a, b) in enumerate(zip(old, now)) if a != b}
 
 
 # ---- syntax trees kept between re-checks (a long-lived process) -----------------------------
@@ -374,7 +440,7 @@ def _keep_trees(stores: dict, key: str, trees: dict, elided: list, kept: dict[st
 
 
 def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, changed, summaries, last, values_context,
-           kept, outlines, rest_sha, heads, scope):
+           kept, outlines, rest_sha, heads, scope, gaps):
     from rcsc.checks import check_model, guards, hints, suppress
     from rcsc.checks.hints import add_hints
     from rcsc.front import ast
@@ -416,8 +482,9 @@ def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, 
         design = ast_to_model(loaded, diags, elided_plans={name: summaries[name] for name in elided_names})
     except m.PlansElided:
         raise _Miss("the semantic pass read an elided plan") from None
-    # The text outside the controllers and the imports are as they were, so
-    # the declarations the value analysis digests are too.
+    # When the text outside the controllers and the imports are as they
+    # were, so are the declarations the value analysis digests (else it
+    # digests them again: None).
     design.values_context = values_context
     if any(not m.is_elided(design.controllers[name]) for name in elided_names):
         raise _Miss("the semantic pass modelled an elided controller's plans")
@@ -441,14 +508,14 @@ def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, 
             return in_elided(d.span)
         return any(in_elided(lab.span) for lab in d.labels) or d.data.get("controller") in elided_names
 
-    shift = _shifts(old_items, new_items, elided_names)
-    kept = [d for d in _moved(last, root, shift, loaded) if d is not None and owned(d)]
+    shift = _shifts(old_items, new_items, elided_names, gaps)
+    kept = [d for d in _moved(last, root, shift, loaded, elided_names) if d is not None and owned(d)]
     if any(getattr(d, "_edited", False) for d in kept):
         raise _Miss("a finding with a label in an edited controller")
     # The "did you mean" of an unknown name (E0100) is chosen among names
     # declared in every controller's header: after an edit of a header, a
     # kept one holds only while those names are as they were.
-    if heads and any(d.code == "E0100" for d in kept) and hints.scope_names_key(design) != scope:
+    if (heads or gaps) and any(d.code == "E0100" for d in kept) and hints.scope_names_key(design) != scope:
         raise _Miss("the names a hint can suggest changed")
     diags.items = [d for d in diags.items if not owned(d)] + kept
     diags._seen = {getattr(d, "_key", None) or (d.code, d.message, d.span.file.path if d.span else "", d.span.start if d.span else -1)
@@ -482,19 +549,21 @@ def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, 
     return CheckResult(diags, design, loaded, partial=True)
 
 
-def _shifts(old_items, new_items, elided_names) -> list[tuple[int, int, int, str]]:
+def _shifts(old_items, new_items, elided_names, gaps: set[int]) -> list[tuple[int, int, int, str]]:
     """The old root text in pieces (old start, old end, offset to add to move
     it to the new text, kind): "gap" (text between controllers, unchanged),
-    "elided" (an unchanged controller) or "edited" (its offsets mean nothing now)."""
+    "elided" (an unchanged controller), "edited" (a controller checked
+    again: its offsets mean nothing now) or "edited gap" (text between
+    controllers where declarations were edited: likewise)."""
     out: list[tuple[int, int, int, str]] = []
     at, delta = 0, 0
-    for (name, s, e, _, _), x in zip(old_items, new_items):
-        out.append((at, s, delta, "gap"))
+    for i, ((name, s, e, _, _), x) in enumerate(zip(old_items, new_items)):
+        out.append((at, s, delta, "edited gap" if i in gaps else "gap"))
         delta = x.start - s
         out.append((s, e, delta, "elided" if name in elided_names else "edited"))
         delta = x.end - e
         at = e
-    out.append((at, 1 << 62, delta, "gap"))
+    out.append((at, 1 << 62, delta, "edited gap" if len(old_items) in gaps else "gap"))
     return out
 
 
@@ -503,11 +572,15 @@ def _in_gap(at: int, new_items) -> bool:
     return not any(x.start <= at < x.end for x in new_items)
 
 
-def _moved(last: dict, root: SourceFile, shift, loaded) -> list[Diagnostic | None]:
+def _moved(last: dict, root: SourceFile, shift, loaded, elided_names) -> list[Diagnostic | None]:
     """The last check's findings (before suppression: `suppress.apply`
     decides again), every span moved to the new text; a finding that points
     into an edited controller is None, one with a label there is marked
-    `_edited` (its label has no place in the new text)."""
+    `_edited` (its label has no place in the new text).  A finding that
+    points into edited text between the controllers is this run's to make
+    again (None), unless it belongs to an unchanged controller (its data
+    names one, or a label points into one): then the design is checked in
+    full."""
     by_where = {replays.where_of(f): f.source for f in loaded}
 
     def piece(s: int):
@@ -517,6 +590,7 @@ def _moved(last: dict, root: SourceFile, shift, loaded) -> list[Diagnostic | Non
         raise _Miss("a finding outside the text pieces")
 
     edited: list[bool] = []
+    in_elided: list[bool] = []
 
     def span(data):
         if data is None:
@@ -528,9 +602,11 @@ def _moved(last: dict, root: SourceFile, shift, loaded) -> list[Diagnostic | Non
                 raise _Miss("a finding in a file this run did not read")
             return Span(src, s, e)
         _, _, d, kind = piece(s)
-        if kind == "edited":
+        if kind in ("edited", "edited gap"):
             edited.append(True)
             return None
+        if kind == "elided":
+            in_elided.append(True)
         return Span(root, s + d, e + d)
 
     out: list[Diagnostic | None] = []
@@ -538,11 +614,18 @@ def _moved(last: dict, root: SourceFile, shift, loaded) -> list[Diagnostic | Non
         for data in list(last["items"]) + list(last["suppressed"]):
             if data[0] in _SUPPRESSION_CODES:
                 continue
-            if data[3] is not None and int(data[3][0]) == 0 and piece(int(data[3][1]))[3] == "edited":
+            where = piece(int(data[3][1]))[3] if data[3] is not None and int(data[3][0]) == 0 else None
+            if where == "edited":
                 out.append(None)
                 continue
             edited.clear()
+            in_elided.clear()
             d = replays.decode(data, span)
+            if where == "edited gap":
+                if in_elided or d.data.get("controller") in elided_names:
+                    raise _Miss("a finding of an unchanged controller in edited declarations")
+                out.append(None)
+                continue
             d._edited = bool(edited)  # type: ignore[attr-defined]
             d.data.pop("suppression", None)
             out.append(d)
