@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
-"""Random edits inside plans: the incremental re-check must equal a full check.
+"""Random edits inside plans, of headers and of declarations: the incremental re-check must equal a full check.
 
     python bench/incremental_fuzz.py --seeds 0..49          # designs of the differential tester, edited
     python bench/incremental_fuzz.py --seeds 0..9 --keep /tmp/incr-fails
     python bench/incremental_fuzz.py --seeds 0..49 --memory  # as the language server re-checks
     python bench/incremental_fuzz.py --seeds 0..19 --daemon  # rcsc check --daemon against fresh processes
     python bench/incremental_fuzz.py --seeds 0..49 --headers 0.8  # mostly edits of controllers' headers
+    python bench/incremental_fuzz.py --seeds 0..49 --declarations 0.8  # mostly edits of declarations outside them
 
 For each seed it takes a design (the differential tester's draw for the seed,
 unchecked, so it may hold findings; or an example or a synthetic design),
@@ -56,6 +57,9 @@ _CMP = {"<=": "<", "<": "<=", ">=": ">", ">": ">=", "==": "!=", "!=": "=="}
 _CMP_RE = re.compile(r"<=|>=|==|!=|(?<![-<>=!])[<>](?![=])")
 # How often `edit` edits a header instead of plans (`--headers` sets it).
 HEADER_RATE = 0.2
+# How often `edit` edits a declaration outside the controllers (`--declarations`).
+DECLARATION_RATE = 0.15
+_DECLARATION = re.compile(r"^(const|gm|enum|record|fn|extern)\b[^\n]*$", re.M)
 _RULE = re.compile(r"^[ \t]*[A-Za-z_][A-Za-z0-9_]*:[^\n]*;[^\n]*$", re.M)
 
 
@@ -80,6 +84,8 @@ def edit(text: str, rng: random.Random) -> tuple[str, list[str]] | None:
     found = it.controller_items(text)
     if not found:
         return None
+    if rng.random() < DECLARATION_RATE:
+        return edit_declaration(text, found, rng)
     if rng.random() < HEADER_RATE:
         return edit_header(text, found, rng)
     with_bodies = [x for x in found if x.bodies]
@@ -140,6 +146,44 @@ def _edit_header(text: str, x, kind: str, rng: random.Random) -> tuple[str, list
         return text[:at] + line.group() + "\n" + text[at:], [f"{x.name} header: a local written twice"]
     if line.group().rstrip().endswith("}") and "{" in line.group():
         return text[:at] + "    // " + text[at:], [f"{x.name} header: a line commented out"]
+    return None
+
+
+def edit_declaration(text: str, found: list, rng: random.Random) -> tuple[str, list[str]] | None:
+    """The text with one edit of a declaration outside the controllers: a
+    number changed (a constant, a range, an initial value, a number in a
+    function), a comparison turned round in a function, a member added to
+    an enum, a constant added that nothing uses; and what was done."""
+    inside = [(x.start, x.end) for x in found]
+    lines = [m for m in _DECLARATION.finditer(text) if not any(s <= m.start() < e for s, e in inside)]
+    kinds = ["number", "number", "compare", "member", "new"]
+    rng.shuffle(kinds)
+    for kind in kinds:
+        if kind == "new":
+            at = found[0].start
+            return text[:at] + "const FZ_NEW: i32 = 5\n\n" + text[at:], ["a constant nothing uses"]
+        if not lines:
+            continue
+        line = rng.choice(lines)
+        head = line.group()
+        if kind == "number":
+            nums = list(_NUMBER.finditer(head))
+            if not nums:
+                continue
+            n = rng.choice(nums)
+            new = str(int(float(n.group())) + rng.choice((-1, 1, 7))) + (".5" if "." in n.group() else "")
+            at = line.start() + n.start()
+            return text[:at] + new + text[at + len(n.group()):], [f"`{head[:40]}`: {n.group()} -> {new}"]
+        if kind == "compare" and line.group(1) == "fn":
+            ops = list(_CMP_RE.finditer(head))
+            if not ops:
+                continue
+            m = rng.choice(ops)
+            at = line.start() + m.start()
+            return text[:at] + _CMP[m.group()] + text[at + len(m.group()):], [f"`{head[:40]}`: {m.group()} -> {_CMP[m.group()]}"]
+        if kind == "member" and line.group(1) == "enum" and "}" in head:
+            at = line.start() + head.rindex("}")
+            return text[:at].rstrip() + ", FZ_EXTRA " + text[at:], [f"`{head[:40]}`: a member added"]
     return None
 
 
@@ -412,10 +456,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--memory", action="store_true", help="the language server's way: successive edits re-checked in one process")
     ap.add_argument("--daemon", action="store_true", help="successive edits checked by `rcsc check --daemon`, against fresh processes")
     ap.add_argument("--headers", type=float, metavar="RATE", help="how often an edit is one of a header (default 0.2)")
+    ap.add_argument("--declarations", type=float, metavar="RATE",
+                    help="how often an edit is one of a declaration outside the controllers (default 0.15)")
     args = ap.parse_args(argv)
+    global HEADER_RATE, DECLARATION_RATE
     if args.headers is not None:
-        global HEADER_RATE
         HEADER_RATE = args.headers
+    if args.declarations is not None:
+        DECLARATION_RATE = args.declarations
     lo, hi = (int(x) for x in args.seeds.split(".."))
     if args.memory:
         return main_memory(lo, hi, args.keep, args.verbose)
