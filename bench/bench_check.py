@@ -29,7 +29,9 @@ the overlay and the server's memory of the last check, of the solver's
 analyses and of the unchanged controllers' syntax trees, filled by a first
 check: the incremental re-check), for the first edit after a full check and
 for a later one, the same after an edit of a header (a local's initial
-value; the controller and its supervisor are checked again), and the same
+value; the controller and its supervisor are checked again), a fresh
+`rcsc check` after an edit of a declaration outside the controllers (a
+Global Memory variable's range), and the same
 for `rcsc check --daemon` (the command's
 CPU time plus the daemon's for the call; rcsc.daemon).  --profile prints the top cProfile hotspots of one
 in-process run of the largest size.
@@ -108,6 +110,15 @@ def edit_header(text: str, value: int, controller: str = "C0") -> str:
     start = text.index(f"controller {controller} ")
     m = re.compile(r"local count: i32 in 0\.\.1000 = (\d+)").search(text, start)
     return text if m is None else text[:m.start(1)] + str(value) + text[m.end(1):]
+
+
+def edit_declaration(text: str, value: int, controller: str = "C0") -> str:
+    """The design with the range of the Global Memory variable that only
+    `controller` reads (`cN_raw`) changed (an edit of a declaration outside
+    the controllers: that controller and its supervisor are checked again)."""
+    name = controller.lower() + "_raw"
+    old = f"gm {name}: f64 = 0.0 from env"
+    return text.replace(old, f"gm {name}: f64 in -{value}.0..1000.0 = 0.0 from env", 1)
 
 
 def stages(path: Path) -> dict[str, float]:
@@ -334,6 +345,16 @@ def main(argv: list[str] | None = None) -> int:
                 paths[n].write_text(text, encoding="utf-8")
                 print(f"{n:>11}: first edit after a full check {first:.2f}, later edits (median) {later:.2f}; "
                       f"fresh process {fresh['cpu']:.2f}", flush=True)
+            print("\n`rcsc check` after an edit of a declaration outside the controllers (the range of a Global Memory\n"
+                  "variable one controller reads: it and its supervisor checked again; fresh process, warm cache; CPU s):")
+            for n in sizes:
+                text = paths[n].read_text(encoding="utf-8")
+                run_command(paths[n])  # the cache holds the unedited design
+                names = re.findall(r"^controller (\w+) ", text, re.M)
+                paths[n].write_text(edit_declaration(text, 900, names[len(names) // 2]), encoding="utf-8")
+                fresh = run_command(paths[n])
+                paths[n].write_text(text, encoding="utf-8")
+                print(f"{n:>11}: {fresh['cpu']:.2f}", flush=True)
             print("\n`rcsc check --daemon` after one edit (CPU s of the command's process plus the daemon's for the call):")
             for n in sizes:
                 d = daemon_edit(paths[n])

@@ -44,6 +44,7 @@ def test_check_benchmark_prints_every_column_and_stage() -> None:
     assert len(rows) == 2 and all(len(r.split("|")) == 6 for r in rows), proc.stdout
     assert "parse" in proc.stdout and "names+types" in proc.stdout and "guards" in proc.stdout
     assert "language server re-check after one edit" in proc.stdout
+    assert re.search(r"edit of a declaration outside the controllers[^\n]*\n[^\n]*\n +2: \d+\.\d\d\n +3: \d+\.\d\d$", proc.stdout, re.M), proc.stdout
     assert re.search(r"^ +3: system \d+\.\d\d s of \d+\.\d\d s CPU, [\d,]+ minor page faults$", proc.stdout, re.M), proc.stdout
 
 
