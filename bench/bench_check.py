@@ -121,6 +121,20 @@ def edit_declaration(text: str, value: int, controller: str = "C0") -> str:
     return text.replace(old, f"gm {name}: f64 in -{value}.0..1000.0 = 0.0 from env", 1)
 
 
+def fresh_edit(path: Path, edit) -> dict:
+    """`rcsc check` in a fresh process after `edit(text, controller)` of the
+    middle controller, the cache holding the unedited design; the file is
+    left as it was."""
+    text = path.read_text(encoding="utf-8")
+    run_command(path)
+    names = re.findall(r"^controller (\w+) ", text, re.M)
+    path.write_text(edit(text, names[len(names) // 2]), encoding="utf-8")
+    try:
+        return run_command(path)
+    finally:
+        path.write_text(text, encoding="utf-8")
+
+
 def stages(path: Path) -> dict[str, float]:
     """CPU seconds of each stage of one in-process check (no cache)."""
     from rcsc.checks import FAMILIES
@@ -337,23 +351,13 @@ def main(argv: list[str] | None = None) -> int:
                   "checked again; in process; CPU s), and `rcsc check` after that edit in a fresh process (warm cache):")
             for n in sizes:
                 first, later = server_edit(paths[n], header=True)
-                text = paths[n].read_text(encoding="utf-8")
-                run_command(paths[n])  # the cache holds the unedited design
-                names = re.findall(r"^controller (\w+) ", text, re.M)
-                paths[n].write_text(edit_header(text, 77, names[len(names) // 2]), encoding="utf-8")
-                fresh = run_command(paths[n])
-                paths[n].write_text(text, encoding="utf-8")
+                fresh = fresh_edit(paths[n], lambda text, name: edit_header(text, 77, name))
                 print(f"{n:>11}: first edit after a full check {first:.2f}, later edits (median) {later:.2f}; "
                       f"fresh process {fresh['cpu']:.2f}", flush=True)
             print("\n`rcsc check` after an edit of a declaration outside the controllers (the range of a Global Memory\n"
                   "variable one controller reads: it and its supervisor checked again; fresh process, warm cache; CPU s):")
             for n in sizes:
-                text = paths[n].read_text(encoding="utf-8")
-                run_command(paths[n])  # the cache holds the unedited design
-                names = re.findall(r"^controller (\w+) ", text, re.M)
-                paths[n].write_text(edit_declaration(text, 900, names[len(names) // 2]), encoding="utf-8")
-                fresh = run_command(paths[n])
-                paths[n].write_text(text, encoding="utf-8")
+                fresh = fresh_edit(paths[n], lambda text, name: edit_declaration(text, 900, name))
                 print(f"{n:>11}: {fresh['cpu']:.2f}", flush=True)
             print("\n`rcsc check --daemon` after one edit (CPU s of the command's process plus the daemon's for the call):")
             for n in sizes:
