@@ -53,14 +53,20 @@ class ConsoleError(Exception):
         self.message = message
 
 
+# The characters of a design's name that segment names hold: a name has at
+# most NAME_MAX (255) bytes, a design's name is not bounded.  The same cut as
+# the C runtime's `rcs_shm_name` and the Rust runtime's `design_part`.
+DESIGN_CHARS = 100
+
+
 def segment_name(design: str, run: str) -> str:
     """The segment of run `run` of design `design` (without the leading `/`)."""
-    return f"rcs-{design}-{run}.console"
+    return f"rcs-{design[:DESIGN_CHARS]}-{run}.console"
 
 
 def find_runs(design: str) -> list[str]:
     """The run ids of the design's Main Programs that publish a segment."""
-    prefix, suffix = f"rcs-{design}-", ".console"
+    prefix, suffix = f"rcs-{design[:DESIGN_CHARS]}-", ".console"
     try:
         names = sorted(p.name for p in SHM_DIR.iterdir())
     except OSError:

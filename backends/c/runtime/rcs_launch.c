@@ -130,7 +130,7 @@ int rcs_launch(int argc, char **argv, const char *design, const char *const *cpu
     clock_gettime(CLOCK_MONOTONIC, &ts);
     char run[64], shm_name[256];
     snprintf(run, sizeof run, "%ld-%lld%09ld", (long)getpid(), (long long)ts.tv_sec, ts.tv_nsec);
-    snprintf(shm_name, sizeof shm_name, "/rcs-%s-%s", design, run);
+    snprintf(shm_name, sizeof shm_name, "/rcs-%.100s-%s", design, run); /* as rcs_shm_name */
 
     /* The CPUs' programs sit beside the launcher. */
     const char *slash = strrchr(prog, '/');
@@ -155,9 +155,13 @@ int rcs_launch(int argc, char **argv, const char *design, const char *const *cpu
         paths[i] = malloc(len);
         snprintf(paths[i], len, "%.*s%s", (int)dir_len, prog, bins[i]);
         if (trace) {
-            size_t plen = strlen(tmp) + strlen(design) + strlen(run) + strlen(cpus[i]) + 32u;
+            /* A CPU's part of the trace is named by its index, not its name:
+             * a file name has at most NAME_MAX (255) bytes, a CPU's or a
+             * design's name is not bounded (the design's is cut as in
+             * rcs_shm_name). */
+            size_t plen = strlen(tmp) + strlen(run) + 160u;
             parts[i] = malloc(plen);
-            snprintf(parts[i], plen, "%s/rcs-%s-%s-%s.jsonl", tmp, design, run, cpus[i]);
+            snprintf(parts[i], plen, "%s/rcs-%.100s-%s-%zu.jsonl", tmp, design, run, i);
         }
         char **args = calloc(n_fwd + 8u, sizeof *args);
         size_t k = 0;

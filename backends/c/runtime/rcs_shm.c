@@ -90,7 +90,11 @@ int rcs_shm_name(char *buf, size_t size, const char *design, const char *run_id)
                  *c == '.' || *c == '-';
         if (!ok) return 0;
     }
-    int n = snprintf(buf, size, "/rcs-%s-%s", design, run_id);
+    /* The design's name is cut to its first 100 characters (as the Rust
+     * runtime's `design_part` and `rcsc console` do): a segment's name has at
+     * most NAME_MAX (255) bytes, a design's name is not bounded, and the run
+     * id keeps concurrent runs apart anyway. */
+    int n = snprintf(buf, size, "/rcs-%.100s-%s", design, run_id);
     return n > 0 && (size_t)n < size;
 }
 

@@ -9,7 +9,7 @@
 // (release instant, then CPU declaration order), which is `rcsc sim`'s
 // trace; and removes the shared memory's name whatever happened.
 
-use super::shm::segment_name;
+use super::shm::{design_part, segment_name};
 use super::sys;
 use std::io::{BufRead, BufReader, Write};
 use std::os::unix::process::{CommandExt, ExitStatusExt};
@@ -128,11 +128,13 @@ pub fn launch(design: &str, cpus: &[&str], bins: &[&str]) -> i32 {
     let mut parts = Vec::new();
     let mut children: Vec<Option<Child>> = Vec::new();
     let mut status = 0;
-    for (cpu, bin) in cpus.iter().zip(bins) {
+    for (i, (cpu, bin)) in cpus.iter().zip(bins).enumerate() {
         let mut cmd = Command::new(dir.join(bin));
         cmd.args(["--run", &run, "--no-console"]);
         if trace.is_some() {
-            let part = format!("{tmp}/rcs-{design}-{run}-{cpu}.jsonl");
+            // Named by the CPU's index, not its name, and the design's name
+            // cut (`design_part`): a file name has at most 255 bytes.
+            let part = format!("{tmp}/rcs-{}-{run}-{i}.jsonl", design_part(design));
             cmd.args(["--trace", &part]);
             parts.push(part);
         }

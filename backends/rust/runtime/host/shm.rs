@@ -88,7 +88,14 @@ pub fn segment_name(design: &str, run_id: &str) -> Option<String> {
         && run_id
             .bytes()
             .all(|c| c.is_ascii_alphanumeric() || c == b'_' || c == b'.' || c == b'-');
-    ok.then(|| format!("/rcs-{design}-{run_id}"))
+    ok.then(|| format!("/rcs-{}-{run_id}", design_part(design)))
+}
+
+/// The design's name as segment and file names hold it: its first 100
+/// characters (a name has at most NAME_MAX, 255, bytes; a design's name is
+/// not bounded).  The same as the C runtime's `rcs_shm_name`.
+pub fn design_part(design: &str) -> String {
+    design.chars().take(100).collect()
 }
 
 impl Shm {
