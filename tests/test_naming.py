@@ -500,3 +500,20 @@ def test_c_buffer_members_are_identifiers() -> None:
     members = [n.buffer_member(c, t) for c in names for t in ("cmd", "status")]
     assert all(re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", m) for m in members), members
     assert len(set(members)) == len(members)
+
+
+def test_a_compiled_test_run_builds_a_design_with_a_250_character_name(tmp_path: Path) -> None:
+    """`rcsc test --target` builds in a folder named after the design: its
+    name is cut there (a folder's name has at most 255 bytes; the digest of
+    the build's files tells builds apart)."""
+    from rcsc.driver import check_path
+    from rcsc.sim import compiled
+
+    name = "d" + "_very_long_design_name" * 11 + "_x" * 6  # 255 characters: a valid name, too long for a folder with a suffix
+    text = (ROOT / "tests" / "mc" / "single.rcs").read_text(encoding="utf-8")
+    text = re.sub(r"^design \w+", f"design {name}", text, count=1, flags=re.M)
+    (tmp_path / "d.rcs").write_text(text, encoding="utf-8")
+    result = check_path(str(tmp_path / "d.rcs"))
+    assert result.model is not None and not result.diags.has_errors() and result.model.name == name
+    built = compiled.build(result.model, "c", str(tmp_path / "build"))
+    assert built.program.is_file() and len(built.folder.name) <= 255

@@ -68,7 +68,9 @@ def build(design: m.Design, target_name: str, build_root: str) -> Build:
     if diags.has_errors():
         raise CompiledError("the target refuses the design: " + "; ".join(d.message for d in diags.errors))
     files = tg.files()
-    folder = Path(build_root) / f"{design.name}-{target_name}-{_key(target_name, files)}"
+    # The design's name is cut (a folder's name has at most 255 bytes); the
+    # digest of the files tells builds apart.
+    folder = Path(build_root) / f"{design.name[:100]}-{target_name}-{_key(target_name, files)}"
     multi = len(design.cpus) > 1
     program = Path(tg.program(str(folder)))
     done = folder / ".rcsc-built"
