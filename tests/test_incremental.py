@@ -520,3 +520,63 @@ def test_an_edit_outside_the_controllers_and_their_declarations_is_checked_in_fu
     _edit(checked / "d.rcs", old, new)
     used, why, _ = _both_ways(checked)
     assert not used and why == "the text outside the controllers changed"
+
+
+IMPORTING = """design t1
+
+import std.lifecycle
+import "lib.rcs"
+
+const HI: f64 = 10.0
+
+gm x: f64 in 0.0..100.0 = 0.0 from env
+
+controller TOP level 2 budget 1 ms {
+    subordinates A
+    verbs Lifecycle
+    plan INIT {
+        E0: true | new -> S1 | A.INIT();
+        E1: A.done | S1 -> done;
+        E2: A.error | S1 -> error(1);
+    }
+    plan HALT { E0: true | new -> done; }
+    plan ABORT { E0: true | new -> done; }
+}
+
+controller A level 1 budget 1 ms {
+    reads x
+    verbs Lifecycle
+    plan INIT {
+        E0: x <= lim_hi() | new -> done;
+        E1: x > 10.0 | new -> error(2);
+    }
+    plan HALT { E0: true | new -> done; }
+    plan ABORT { E0: true | new -> done; }
+}
+
+cpu MAIN { heartbeat 10 ms schedule TOP, A }
+"""
+
+
+def test_a_declaration_an_imported_file_names_is_checked_in_full(tmp_path: Path) -> None:
+    """The names of a design are shared by all its files: `A` reaches `HI`
+    only through a function of the imported file, which its text does not
+    name.  After `HI` drops to 9.0, a value of `x` in 9..10 makes no rule
+    of `new` true (E0516): the full check's finding, not the last one's."""
+    folder = tmp_path / "a"
+    folder.mkdir()
+    (folder / "lib.rcs").write_text("module lib\nfn lim_hi() -> f64 = HI\n", encoding="utf-8")
+    (folder / "d.rcs").write_text(IMPORTING, encoding="utf-8")
+    assert '"code": "E0516"' not in _check(folder)
+    _edit(folder / "d.rcs", "const HI: f64 = 10.0", "const HI: f64 = 9.0")
+    used, why, report = _both_ways(folder)
+    assert not used and why == "an imported file names an edited declaration"
+    assert '"code": "E0516"' in report
+
+
+def test_a_damaged_list_of_declarations_is_a_miss_not_a_crash() -> None:
+    text = IMPORTING
+    items = it.controller_items(text)
+    outline = {"declarations": {"frame": "x", "digests": {"Junk": "y"}}}
+    with pytest.raises(incremental._Miss, match="a corrupt entry"):
+        incremental._edited_declarations("d.rcs", text, items, outline, [])

@@ -63,7 +63,7 @@ from rcsc.checks import cache
 from rcsc.checks import replay as replays
 from rcsc.diagnostics import Diagnostic, Diagnostics
 from rcsc.front import items as it
-from rcsc.front.declarations import changed_names, declarations, gap_digests, mentioning
+from rcsc.front.declarations import changed_names, declarations, gap_digests, mentioning, names_in
 from rcsc.front.source import SourceFile, Span, normalized
 from rcsc.outputs import safeio
 
@@ -226,10 +226,12 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
         files = last["files"]
         if files[0][2] != outline["root"]:
             raise _Miss("findings and outline of different checks")
+        imported = []
         for _, where, sha in files[1:]:
             text = read(where)
             if text is None or replays._sha(normalized(text)) != sha:
                 raise _Miss("an imported file changed")
+            imported.append(text)
         old_items = [(str(n), int(s), int(e), str(o), str(b)) for n, s, e, o, b in outline["controllers"]]
         summaries = outline["summaries"]
         values_context = outline.get("values_context")
@@ -253,7 +255,7 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
     if [x.name for x in new_items] != [n for n, *_ in old_items]:
         raise _Miss("controllers added, removed or renamed")
     # Declarations edited outside the controllers: the names they declare.
-    declared = _edited_declarations(path, text, new_items, outline) if sums[0] != outline["rest"] else set()
+    declared = _edited_declarations(path, text, new_items, outline, imported) if sums[0] != outline["rest"] else set()
     changed: set[str] = set()
     headers: set[str] = set()
     outlines: dict[str, str] = {}
@@ -297,16 +299,21 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
                   outline.get("scope"), gaps)
 
 
-def _edited_declarations(path: str, text: str, new_items: list, outline: dict) -> set[str]:
+def _edited_declarations(path: str, text: str, new_items: list, outline: dict, imported: list[str]) -> set[str]:
     """The names whose declarations outside the controllers an edit changed
     (changed, added or removed, and those of the declarations that name
     them: `rcsc.front.declarations`).  Misses when anything else outside
-    the controllers changed: the `design` line, an import, a CPU, a comment."""
+    the controllers changed (the `design` line, an import, a CPU, a
+    comment), and when an imported file (`imported`, their texts) names
+    one: the names of a design are shared by all its files, so a function
+    or a controller of an imported file can use a constant of the root."""
     from rcsc.front.rdparse import Fallback, parse_fast
 
     stored = outline.get("declarations")
     if not isinstance(stored, dict) or not isinstance(stored.get("frame"), str) or not isinstance(stored.get("digests"), dict):
         raise _Miss("the text outside the controllers changed")
+    if not all(isinstance(k, str) and " " in k and isinstance(v, str) for k, v in stored["digests"].items()):
+        raise _Miss("a corrupt entry")
     # The controllers are holes: only the text outside them is parsed.
     try:
         tree, found = parse_fast(SourceFile(path, text), [(x.start, x.end) for x in new_items])
@@ -324,6 +331,8 @@ def _edited_declarations(path: str, text: str, new_items: list, outline: dict) -
         # A CPU (or an import) names what changed: its schedule or rate may
         # depend on it.
         raise _Miss("the text outside the controllers changed")
+    if any(not names_in(other).isdisjoint(names) for other in imported):
+        raise _Miss("an imported file names an edited declaration")
     return names
 
 

@@ -15,7 +15,9 @@ text and its syntax tree (the controllers may be holes in it):
   declarations (the `design` line, imports, CPUs, comments, doc comments),
   blank lines and indentation aside.  A re-check after an edit of the frame
   is a full check;
-- which controllers' texts hold one of a set of names (`mentioning`).
+- which controllers' texts hold one of a set of names (`mentioning`), and
+  which names another file uses (`names_in`: an imported file can use the
+  root's names too).
 
 Names are found as words of the text, comments and strings included, and a
 name is found inside a longer word too (`MAX` in `MAX_COUNT`): a controller
@@ -105,6 +107,14 @@ def mentioning(text: str, controllers: list[ControllerItem], names: set[str]) ->
             else:
                 at = text.find(name, at + 1)
     return out
+
+
+def names_in(text: str) -> frozenset[str]:
+    """The names a text uses: its name tokens, as the parser reads them
+    (not the words of its comments and strings)."""
+    from rcsc.front.lexer import NAME_START, tokenize
+
+    return frozenset(tok for tok in tokenize(text)[0] if tok[:1] in NAME_START)
 
 
 def gap_digests(text: str, controllers: list[ControllerItem]) -> list[str]:
