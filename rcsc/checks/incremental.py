@@ -12,8 +12,9 @@ again:
    Outside the controllers, only declarations (constants, enums, records,
    Global Memory, functions, externs, verb sets) may have changed: the
    text between them (the `design` line, imports, CPUs, comments) must be
-   as it was, blanks aside (`rcsc.front.declarations`); otherwise the
-   design is checked in full.
+   as it was, blanks aside (`rcsc.front.declarations`), and no imported
+   file may use a name whose declaration changed (the files of a design
+   share their names); otherwise the design is checked in full.
 2. The controllers checked again are those whose text changed, those
    whose text names what an edited declaration declares (directly or
    through another declaration), and the supervisors of those whose header
