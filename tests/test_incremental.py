@@ -580,3 +580,24 @@ def test_a_damaged_list_of_declarations_is_a_miss_not_a_crash() -> None:
     outline = {"declarations": {"frame": "x", "digests": {"Junk": "y"}}}
     with pytest.raises(incremental._Miss, match="a corrupt entry"):
         incremental._edited_declarations("d.rcs", text, items, outline, [])
+
+
+def test_a_comment_moved_past_a_controller_is_an_edit_of_the_text_outside() -> None:
+    """The frame compared after an edit of declarations keeps the places of
+    the controllers: a comment before C1 is C1's doc comment, after it not."""
+    from rcsc.front.declarations import declarations
+    from rcsc.front.rdparse import parse_fast
+
+    def frame(text: str) -> str:
+        found = it.controller_items(text)
+        tree, _ = parse_fast(SourceFile("d.rcs", text), [(x.start, x.end) for x in found])
+        decls = declarations(text, tree.items, found)
+        assert decls is not None
+        return decls.frame
+
+    base = synthetic.generate(3, 1, 2)
+    before_c1 = base.replace("controller C1 ", "// a note\ncontroller C1 ", 1)
+    before_c2 = base.replace("controller C2 ", "// a note\ncontroller C2 ", 1)
+    assert frame(before_c1) != frame(before_c2)
+    # Blank lines, and a declaration added between two others, leave it as it was.
+    assert frame(base.replace("const GAIN", "\n\nconst NEW: i32 = 1\nconst GAIN", 1)) == frame(base)

@@ -60,14 +60,20 @@ def declarations(text: str, items: list, controllers: list[ControllerItem]) -> D
         body = text[x.span.start:x.span.end]
         digests[key] = digest(body)
         words[key] = frozenset(_WORD.findall(body))
-    cuts = sorted([(c.start, c.end) for c in controllers] + [(x.span.start, x.span.end) for x in found])
-    pieces, at = [], 0
-    for start, end in cuts:
+    # The frame: the text between the cuts, blanks aside, in groups by the
+    # controllers between them (a comment that moves past a controller
+    # changes it: it may be that controller's doc comment now).
+    cuts = sorted([(c.start, c.end, True) for c in controllers] + [(x.span.start, x.span.end, False) for x in found])
+    groups: list[list[str]] = [[]]
+    at = 0
+    for start, end, is_controller in cuts:
         if start > at:
-            pieces.append(text[at:start].strip())
+            groups[-1].append(text[at:start].strip())
+        if is_controller:
+            groups.append([])
         at = max(at, end)
-    pieces.append(text[at:].strip())
-    frame = "\x00".join(p for p in pieces if p)
+    groups[-1].append(text[at:].strip())
+    frame = "\x01".join("\x00".join(p for p in group if p) for group in groups)
     return Declarations(digest(frame), frozenset(_WORD.findall(frame)), digests, words)
 
 
