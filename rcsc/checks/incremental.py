@@ -289,14 +289,17 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
     global last_rechecked
     last_rechecked = frozenset(rechecked)
     elided = [x for x in new_items if x.name not in rechecked]
-    kept = _kept_trees(stores, key, elided, outlines, sums[0])
+    new_gaps = gap_digests(text, new_items)
+    # The text before each controller (where its doc comment is).
+    before = {x.name: new_gaps[i] for i, x in enumerate(new_items)}
+    kept = _kept_trees(stores, key, elided, outlines, before)
     # The parser reads the edited controllers whole, the other controllers
     # with their plan bodies as blanks, and nothing of those whose tree is
     # kept: those are holes in the text, which it reads as blanks.
     holes = [r for x in elided for r in ([(x.start, x.end)] if x.name in kept else [(s, e) for _, s, e in x.bodies])]
-    gaps = _edited_gaps(outline, text, new_items) if sums[0] != outline["rest"] else set()
+    gaps = _edited_gaps(outline, new_gaps) if sums[0] != outline["rest"] else set()
     return _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, rechecked, summaries, last,
-                  None if gaps else values_context, kept, outlines, sums[0], {name: heads[name] for name in headers},
+                  None if gaps else values_context, kept, outlines, before, {name: heads[name] for name in headers},
                   outline.get("scope"), gaps)
 
 
@@ -337,11 +340,11 @@ def _edited_declarations(path: str, text: str, new_items: list, outline: dict, i
     return names
 
 
-def _edited_gaps(outline: dict, text: str, new_items: list) -> set[int]:
+def _edited_gaps(outline: dict, now: list[str]) -> set[int]:
     """The pieces of text outside the controllers (before each, and after
-    the last: by index) that an edit of declarations changed."""
+    the last: by index) that an edit of declarations changed (`now`: their
+    digests in the new text)."""
     old = outline.get("gaps")
-    now = gap_digests(text, new_items)
     if not isinstance(old, list) or len(old) != len(now):
         raise _Miss("a corrupt entry")
     return {i for i, (a, b) in enumerate(zip(old, now)) if a != b}
@@ -383,17 +386,19 @@ class _KeptTree:
         self.start = start
 
 
-def _tree_key(x: it.ControllerItem, outline_sha: str, rest_sha: str) -> tuple:
-    # The text outside the controllers belongs to the key too: a doc comment
-    # written before the controller since its tree was kept (checked in
-    # full then) documents the controller, which a kept tree would not know.
-    return (rest_sha, outline_sha, tuple(e - s for _, s, e in x.bodies))
+def _tree_key(x: it.ControllerItem, outline_sha: str, before_sha: str) -> tuple:
+    # The text between the last controller and this one belongs to the key
+    # too: a doc comment written before the controller since its tree was
+    # kept (checked in full then) documents the controller, which a kept
+    # tree would not know.  Only that text: an edit of a declaration
+    # elsewhere keeps the tree.
+    return (before_sha, outline_sha, tuple(e - s for _, s, e in x.bodies))
 
 
-def _kept_trees(stores: dict, key: str, elided: list, outlines: dict[str, str], rest_sha: str) -> dict[str, _KeptTree]:
+def _kept_trees(stores: dict, key: str, elided: list, outlines: dict[str, str], before: dict[str, str]) -> dict[str, _KeptTree]:
     """The kept trees of the elided controllers `elided` that are still
-    their trees (same outline, same plan body lengths, same text around the
-    controllers)."""
+    their trees (same outline, same plan body lengths, same text between
+    the controller before and this one)."""
     designs = stores.get(TREES)
     found = designs.get(key) if designs is not None else None
     if not found:
@@ -401,7 +406,7 @@ def _kept_trees(stores: dict, key: str, elided: list, outlines: dict[str, str], 
     out = {}
     for x in elided:
         k = found.get(x.name)
-        if k is not None and k.key == _tree_key(x, outlines[x.name], rest_sha):
+        if k is not None and k.key == _tree_key(x, outlines[x.name], before[x.name]):
             out[x.name] = k
     return out
 
@@ -434,7 +439,7 @@ def _spans_of(node) -> list[Span]:
 
 
 def _keep_trees(stores: dict, key: str, trees: dict, elided: list, kept: dict[str, _KeptTree], outlines: dict[str, str],
-                rest_sha: str) -> None:
+                before: dict[str, str]) -> None:
     designs = stores.get(TREES)
     if designs is None:
         return
@@ -443,14 +448,14 @@ def _keep_trees(stores: dict, key: str, trees: dict, elided: list, kept: dict[st
         if x.name not in kept and x.name in trees:
             tree = trees[x.name]
             if tree.doc is None:  # a doc comment lies before the controller: blanking it would orphan it
-                found[x.name] = _KeptTree(_tree_key(x, outlines[x.name], rest_sha), x.start, tree, _spans_of(tree))
+                found[x.name] = _KeptTree(_tree_key(x, outlines[x.name], before[x.name]), x.start, tree, _spans_of(tree))
     designs[key] = found
     while len(designs) > _KEPT_DESIGNS:
         del designs[next(iter(designs))]
 
 
 def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, changed, summaries, last, values_context,
-           kept, outlines, rest_sha, heads, scope, gaps):
+           kept, outlines, before, heads, scope, gaps):
     from rcsc.checks import check_model, guards, hints, suppress
     from rcsc.checks.hints import add_hints
     from rcsc.front import ast
@@ -486,7 +491,7 @@ def _check(path, as_module, stores, overlay, text, holes, new_items, old_items, 
             raise _Miss("the parser found other controllers than the scan")
         if [(p.name.name, p.span.end - 1) for p in c.plans] != [(v, e) for v, _, e in x.bodies]:
             raise _Miss("the parser found other plans than the scan")
-    _keep_trees(stores, replays.key_of(path, as_module), trees, elided, kept, outlines, rest_sha)
+    _keep_trees(stores, replays.key_of(path, as_module), trees, elided, kept, outlines, before)
     elided_names = {x.name for x in elided}
     try:
         design = ast_to_model(loaded, diags, elided_plans={name: summaries[name] for name in elided_names})
