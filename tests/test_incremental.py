@@ -128,7 +128,7 @@ def test_the_scan_after_an_edit_finds_what_a_whole_scan_finds(n, plans, edits) -
         whole = it._scan(text)
         assert _as_found(found) == _as_found(whole), text
         sums = it.digests(text)
-        assert sums == (None if whole is None else (it.digest(it.rest_of(text, whole)),
+        assert sums == (None if whole is None else (it.gaps(text, whole),
                                                     [(it.digest(x.outline(text)), it.digest(x.body_text(text))) for x in whole]))
 
 

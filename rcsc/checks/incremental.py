@@ -64,12 +64,12 @@ from rcsc.checks import cache
 from rcsc.checks import replay as replays
 from rcsc.diagnostics import Diagnostic, Diagnostics
 from rcsc.front import items as it
-from rcsc.front.declarations import changed_names, declarations, gap_digests, mentioning, names_in
+from rcsc.front.declarations import changed_names, declarations, mentioning, names_in
 from rcsc.front.source import SourceFile, Span, normalized
 from rcsc.outputs import safeio
 
 NAMESPACE = "outline"
-FORMAT = 3
+FORMAT = 4
 # In a long-lived process only (`memory_stores`): the syntax trees of the
 # unchanged controllers, kept from one re-check to the next (`_KeptTree`).
 TREES = "trees"
@@ -154,7 +154,7 @@ def _remember_outline(path: str, as_module: bool, folder: str | None, result, st
     value = {
         "format": FORMAT,
         "root": replays._sha(text),
-        "rest": sums[0],
+        "gaps": sums[0],
         "controllers": [[x.name, x.start, x.end, osha, bsha] for x, (osha, bsha) in zip(found, sums[1])],
         "summaries": summaries,
         "heads": {x.name: controller_head(design.controllers[x.name]) for x in found},
@@ -163,7 +163,6 @@ def _remember_outline(path: str, as_module: bool, folder: str | None, result, st
         "values_context": design.values_context,
         # What an edit of declarations outside the controllers is compared with (`_edited_declarations`).
         "declarations": None if decls is None else {"frame": decls.frame, "digests": decls.digests},
-        "gaps": gap_digests(text, found),
     }
     target = stores[NAMESPACE] if stores is not None else cache.Store(folder, NAMESPACE)  # type: ignore[arg-type]
     try:
@@ -255,8 +254,11 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
         raise _Miss("the text outside the controllers changed")
     if [x.name for x in new_items] != [n for n, *_ in old_items]:
         raise _Miss("controllers added, removed or renamed")
-    # Declarations edited outside the controllers: the names they declare.
-    declared = _edited_declarations(path, text, new_items, outline, imported) if sums[0] != outline["rest"] else set()
+    # The pieces of text outside the controllers (before each, and after the
+    # last) that the edit changed; in them, the names whose declarations it
+    # changed.
+    gaps = _edited_gaps(outline, sums[0])
+    declared = _edited_declarations(path, text, new_items, outline, imported) if gaps else set()
     changed: set[str] = set()
     headers: set[str] = set()
     outlines: dict[str, str] = {}
@@ -272,7 +274,7 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
         # be the type of a verb's parameter or of a status field, which its
         # supervisor reads).
         headers |= mentioning(text, new_items, declared)
-    if not changed and not headers and sums[0] == outline["rest"]:
+    if not changed and not headers and not gaps:
         raise _Miss("no controller changed")
     heads = outline.get("heads")
     if not isinstance(heads, dict) or any(x.name not in summaries or x.name not in heads for x in new_items):
@@ -289,15 +291,13 @@ def _recheck(path: str, as_module: bool, stores: dict, overlay: dict[str, str]):
     global last_rechecked
     last_rechecked = frozenset(rechecked)
     elided = [x for x in new_items if x.name not in rechecked]
-    new_gaps = gap_digests(text, new_items)
     # The text before each controller (where its doc comment is).
-    before = {x.name: new_gaps[i] for i, x in enumerate(new_items)}
+    before = {x.name: sums[0][i] for i, x in enumerate(new_items)}
     kept = _kept_trees(stores, key, elided, outlines, before)
     # The parser reads the edited controllers whole, the other controllers
     # with their plan bodies as blanks, and nothing of those whose tree is
     # kept: those are holes in the text, which it reads as blanks.
     holes = [r for x in elided for r in ([(x.start, x.end)] if x.name in kept else [(s, e) for _, s, e in x.bodies])]
-    gaps = _edited_gaps(outline, new_gaps) if sums[0] != outline["rest"] else set()
     return _check(path, as_module, stores, overlay, text, holes, new_items, old_items, elided, rechecked, summaries, last,
                   None if gaps else values_context, kept, outlines, before, {name: heads[name] for name in headers},
                   outline.get("scope"), gaps)
@@ -342,8 +342,8 @@ def _edited_declarations(path: str, text: str, new_items: list, outline: dict, i
 
 def _edited_gaps(outline: dict, now: list[str]) -> set[int]:
     """The pieces of text outside the controllers (before each, and after
-    the last: by index) that an edit of declarations changed (`now`: their
-    digests in the new text)."""
+    the last: by index) that an edit changed (`now`: their digests in the
+    new text, `items.gaps`)."""
     old = outline.get("gaps")
     if not isinstance(old, list) or len(old) != len(now):
         raise _Miss("a corrupt entry")

@@ -122,12 +122,3 @@ def names_in(text: str) -> frozenset[str]:
 
     return frozenset(tok for tok in tokenize(text)[0] if tok[:1] in NAME_START)
 
-
-def gap_digests(text: str, controllers: list[ControllerItem]) -> list[str]:
-    """The digest of the text before each controller and after the last one."""
-    out, at = [], 0
-    for c in controllers:
-        out.append(digest(text[at:c.start]))
-        at = c.end
-    out.append(digest(text[at:]))
-    return out

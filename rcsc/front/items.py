@@ -215,11 +215,12 @@ def digest(text: str) -> str:
 _digests_memo: list = [None, None]  # the last text digested (the same object) and its digests
 
 
-def digests(text: str) -> tuple[str, list[tuple[str, str]]] | None:
-    """The digest of the rest of `text` (`rest_of`) and, for each controller
-    of `controller_items(text)`, the digests of its outline and of its plan
-    bodies; None when the braces do not balance.  Kept for the last text: a
-    re-check compares them and then stores them."""
+def digests(text: str) -> tuple[list[str], list[tuple[str, str]]] | None:
+    """The digests of the text outside the controllers of
+    `controller_items(text)` (`gaps`) and, for each controller, the digests
+    of its outline and of its plan bodies; None when the braces do not
+    balance.  Kept for the last text: a re-check compares them and then
+    stores them."""
     if _digests_memo[0] is text:
         return _digests_memo[1]
     found = controller_items(text)
@@ -232,19 +233,20 @@ def digests(text: str) -> tuple[str, list[tuple[str, str]]] | None:
             j = origin[i] if origin is not None else None
             # A controller the last scan did not read again has the text it had.
             sums.append(before[1][j] if j is not None else (digest(x.outline(text)), digest(x.body_text(text))))  # type: ignore[index]
-        out = (digest(rest_of(text, found)), sums)
+        out = (gaps(text, found), sums)
     _digests_memo[0], _digests_memo[1] = text, out
     return out
 
 
-def rest_of(text: str, items: list[ControllerItem]) -> str:
-    """The text outside every controller (declarations, CPUs, imports), items cut out."""
-    parts, at = [], 0
-    for it in items:
-        parts.append(text[at:it.start])
-        at = it.end
-    parts.append(text[at:])
-    return "\x00".join(parts)
+def gaps(text: str, controllers: list[ControllerItem]) -> list[str]:
+    """The digests of the text outside the controllers (declarations, CPUs,
+    imports): before each controller, and after the last one."""
+    out, at = [], 0
+    for c in controllers:
+        out.append(digest(text[at:c.start]))
+        at = c.end
+    out.append(digest(text[at:]))
+    return out
 
 
 def blank(text: str, spans: list[tuple[int, int]]) -> str:

@@ -130,7 +130,9 @@ int rcs_launch(int argc, char **argv, const char *design, const char *const *cpu
     clock_gettime(CLOCK_MONOTONIC, &ts);
     char run[64], shm_name[256];
     snprintf(run, sizeof run, "%ld-%lld%09ld", (long)getpid(), (long long)ts.tv_sec, ts.tv_nsec);
-    snprintf(shm_name, sizeof shm_name, "/rcs-%.100s-%s", design, run); /* as rcs_shm_name */
+    /* The design's name cut as rcs_shm_name cuts it (a name has at most 255 bytes). */
+    const int design_chars = 100;
+    snprintf(shm_name, sizeof shm_name, "/rcs-%.*s-%s", design_chars, design, run);
 
     /* The CPUs' programs sit beside the launcher. */
     const char *slash = strrchr(prog, '/');
@@ -156,12 +158,11 @@ int rcs_launch(int argc, char **argv, const char *design, const char *const *cpu
         snprintf(paths[i], len, "%.*s%s", (int)dir_len, prog, bins[i]);
         if (trace) {
             /* A CPU's part of the trace is named by its index, not its name:
-             * a file name has at most NAME_MAX (255) bytes, a CPU's or a
-             * design's name is not bounded (the design's is cut as in
-             * rcs_shm_name). */
-            size_t plen = strlen(tmp) + strlen(run) + 160u;
+             * a file name has at most NAME_MAX (255) bytes, and a CPU's name
+             * is not bounded. */
+            size_t plen = strlen(tmp) + strlen(run) + (size_t)design_chars + 64u;
             parts[i] = malloc(plen);
-            snprintf(parts[i], plen, "%s/rcs-%.100s-%s-%zu.jsonl", tmp, design, run, i);
+            snprintf(parts[i], plen, "%s/rcs-%.*s-%s-%zu.jsonl", tmp, design_chars, design, run, i);
         }
         char **args = calloc(n_fwd + 8u, sizeof *args);
         size_t k = 0;
