@@ -44,6 +44,13 @@ LIB_ALLOWS = [
     "non_snake_case",
     "non_upper_case_globals",
     "clippy::upper_case_acronyms",
+    # A binding named like a variant of its type (`fn f(x: Axis)` with `enum
+    # Axis { x, y }`, or the helpers' `|x|` over an array of it) is an error
+    # by default: in a pattern, an unqualified name that is a variant in scope
+    # matches the variant instead of binding.  The generated code names every
+    # variant by its type (`Axis::x`) and never imports variants, so such a
+    # name always binds, and the design may name its members as it likes.
+    "bindings_with_variant_name",
 ]
 # Expressions keep the structure the design gives them; a rewrite that a lint
 # suggests could change what they compute (a negated comparison is not the same
