@@ -24,8 +24,8 @@ from rcsc.backends.ada.naming import AdaNames
 from rcsc.backends.c import LAUNCHER_FILES, RUNTIME_FILES as C_RUNTIME_FILES, CBackend
 from rcsc.backends.c.tables import main_tables
 from rcsc.outputs.backend import (
-    BuildOptions, CtrlInfo, OutFile, RuleStep, StateTest, Target, base_cpu, built_controllers, cpu_ticks, expr_key,
-    impure_functions, initial_value, keeps_gm_stamps, lower_controller, ordered_types, plan_layout, register, schedule_of,
+    BuildOptions, CtrlInfo, OutFile, RuleStep, StateTest, Target, base_cpu, built_controllers, calls_impure, cpu_ticks,
+    evaluated_first, expr_key, impure_functions, initial_value, keeps_gm_stamps, lower_controller, ordered_types, plan_layout, register, schedule_of,
     tests_state, types_with_arrays,
 )
 from rcsc.semantics.types import BOOL, DURATION, I32, I64, U32, ArrayType, EnumType, FloatType, IntType, RecordType, Type
@@ -83,6 +83,50 @@ class AdaBackend(Target):
         self.info: CtrlInfo | None = None
         self.verb: str | None = None
         self.cse: dict[object, str] = {}
+        # Constants that make extern calls happen left to right (Ada leaves
+        # the order of operands, arguments and aggregate components to the
+        # compiler, and GNAT takes them right to left): operand -> its
+        # constant while the expression holding it is emitted.  The
+        # declare expressions that hold them are Ada 2022, so a design that
+        # needs one is compiled as Ada 2022 (`ada_version`), any other as Ada 2012.
+        self.seq_names: dict[int, str] = {}
+        self.seq_count = 0
+        self.declares = False
+
+    # ---- order of evaluation -------------------------------------------------------
+
+    def expr(self, e: m.Expr) -> str:
+        """As the base class, with the operands that `evaluated_first` names
+        in constants of a declare expression around it:
+        `pair(f(1), f(2))` is `(declare Rcs_Seq_1 : constant ... := F (1); begin Pair (Rcs_Seq_1, F (2)))`."""
+        name = self.seq_names.get(id(e))
+        if name is not None:
+            return name
+        first = evaluated_first(e, self.impure)
+        if not first:
+            return super().expr(e)
+        decls = self.sequence(first)
+        try:
+            body = _strip(super().expr(e))
+        finally:
+            for x in first:
+                del self.seq_names[id(x)]
+        return f"(declare {' '.join(decls)} begin {body})"
+
+    def sequence(self, exprs: list[m.Expr]) -> list[str]:
+        """Declarations of constants holding `exprs`, in order; until the caller
+        drops them from `seq_names`, the expressions are emitted as their names."""
+        decls = []
+        for x in exprs:
+            self.seq_count += 1
+            temp = f"Rcs_Seq_{self.seq_count}"
+            decls.append(f"{temp} : constant {self.atype(x.type)} := {_strip(self.expr(x))};")
+            self.seq_names[id(x)] = temp
+        self.declares = True
+        return decls
+
+    def ada_version(self) -> str:
+        return "2022" if self.declares else "2012"
 
     # ---- files ---------------------------------------------------------------------
 
@@ -140,7 +184,7 @@ class AdaBackend(Target):
         if self.options.exclude_simulators:
             files.append(OutFile(f"{c.n.p}_io.h", c.render("io.h.j2", **common)))
             files.append(OutFile(f"{c.n.p}_io.c", c.render("io_stub.c.j2", **common), user=True))
-        files.append(OutFile(PROJECT, self.render("project.gpr.j2", mains=mains, launcher=launcher)))
+        files.append(OutFile(PROJECT, self.render("project.gpr.j2", mains=mains, launcher=launcher, ada_version=self.ada_version())))
         return files
 
     def build_commands(self, folder: str) -> list[tuple[list[str], dict[str, str] | None]]:
@@ -454,9 +498,19 @@ class AdaBackend(Target):
         cmd = f"Buf.{self.n.buffer_member(s.sub, 'cmd')}"
         out = [f"{pad}{cmd}.Head.Verb := {self.n.verb(s.sub, s.verb)};"]
         if verb.params:
-            # The arguments go into the verb's variant of the union, whole.
+            # The arguments go into the verb's variant of the union, whole.  An
+            # aggregate's components come in any order: those that call
+            # externs are computed first, in the order of the parameters.
+            first = [a for a in s.args if calls_impure(a, self.impure)][:-1]
+            decls = self.sequence(first)
             vals = ", ".join(f"{self.n.member(p.name)} => {_strip(self.expr(a))}" for p, a in zip(verb.params, s.args))
-            out.append(f"{pad}{cmd}.Args := (Verb => {self.n.verb(s.sub, s.verb)}, {self.n.member(s.verb)} => ({vals}));")
+            for a in first:
+                del self.seq_names[id(a)]
+            store = f"{cmd}.Args := (Verb => {self.n.verb(s.sub, s.verb)}, {self.n.member(s.verb)} => ({vals}));"
+            if decls:
+                out += [f"{pad}declare"] + [f"{pad}   {d}" for d in decls] + [f"{pad}begin", f"{pad}   {store}", f"{pad}end;"]
+            else:
+                out.append(pad + store)
         out.append(f"{pad}Send.{self.n.member(s.sub)} := True;")
         return out
 
@@ -498,6 +552,7 @@ class AdaBackend(Target):
         init = [f"Loc.{n.member(x)} := {self.literal(initial_value(v), v.type)};" for x, v in c.locals.items()]
         for s in subs:
             init += [f"Sent.{s['member']} := 0;", f"Send.{s['member']} := False;"]
+        seq_before = self.seq_count
         plans = [self.plan(c, plan) for plan in c.plans.values()]
         self.verb = None
         pre, post = self.stmts(c.pre, 1), self.stmts(c.post, 1)
@@ -510,6 +565,12 @@ class AdaBackend(Target):
             "states": [{"name": n.state(s), "number": i} for i, s in enumerate(info.states)],
             "rules": [{"name": n.rule(p.verb, r.label), "number": info.rule_number[(p.verb, r.index)]} for p in c.plans.values() for r in p.rules],
             "plans": plans, "pre": pre, "post": post, "tick": self.tick(), "gm_stamps": gm_stamps,
+            # GNAT 12 does not count a use of a declare expression's constant
+            # inside an aggregate (`(declare X : constant ... := F; begin
+            # T'(A => X, B => G))`) and warns that X is not referenced: the
+            # warning is turned off for those constants only, in the
+            # controllers that have some.
+            "sequenced": self.seq_count > seq_before,
         }
         # The step always reads Cycle (the entry cycle of a new command and the
         # status stamp), so it needs no `pragma Unreferenced (Cycle)`.
@@ -602,5 +663,5 @@ def _strip(text: str) -> str:
             depth -= 1
             if depth == 0 and i != len(text) - 1:
                 return text
-    # an if-expression keeps its parentheses (Ada requires them)
-    return text if text.startswith("(if ") else text[1:-1]
+    # if- and declare expressions keep their parentheses (Ada requires them)
+    return text if text.startswith(("(if ", "(declare ")) else text[1:-1]

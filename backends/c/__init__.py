@@ -206,6 +206,9 @@ class CBackend(CTarget):
             init += [f"self->sent.{s['member']} = 0u;", f"self->send.{s['member']} = false;"]
         plans = [self.plan(c, plan) for plan in c.plans.values()]
         self.verb = None
+        self.take_temporaries()
+        pre, post = self.stmts(c.pre, 1), self.stmts(c.post, 1)
+        pre = ["    " + d for d in self.take_temporaries()] + pre
         ctx = {
             "name": c_comment(c.name), "doc": c_comment(c.doc), "stem": n.ctrl_stem(c.name), "type": self.ctrl_type(c.name),
             "init_fn": n.ctrl_part(c.name, "init"), "step_fn": n.ctrl_part(c.name, "step"),
@@ -218,7 +221,7 @@ class CBackend(CTarget):
             "states": [{"name": n.state(s), "number": i} for i, s in enumerate(info.states)],
             "rules": [{"name": n.rule(plan.verb, r.label), "number": info.rule_number[(plan.verb, r.index)]} for plan in c.plans.values() for r in plan.rules],
             "plans": plans,
-            "pre": self.stmts(c.pre, 1), "post": self.stmts(c.post, 1),
+            "pre": pre, "post": post,
             "tick": self.tick(),
             "gm_stamps": [self.ident(u.name) for u in c.writes] if keeps_gm_stamps(self.design) else [],
         }
@@ -228,6 +231,8 @@ class CBackend(CTarget):
     def plan(self, c: m.Controller, plan: m.Plan) -> dict:
         self.verb = plan.verb
         layout = plan_layout(plan, self.impure)
+        self.take_temporaries()
+        body = self.layout(layout)
         return {
             "fn": self.n.plan_fn(plan.verb),
             "verb": c_comment(plan.verb),
@@ -235,7 +240,7 @@ class CBackend(CTarget):
             "where": self.where_text(plan.span),
             "continuous": plan.continuous,
             "needs_state": tests_state(layout),
-            "body": self.layout(layout),
+            "body": self.take_temporaries() + body,
         }
 
     def layout(self, items: list) -> list[str]:

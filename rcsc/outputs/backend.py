@@ -202,6 +202,44 @@ def impure_functions(design: m.Design) -> set[str]:
     return impure
 
 
+def calls_impure(e: m.Expr, impure: set[str]) -> bool:
+    """Whether evaluating `e` may call an extern (an impure function, see above)."""
+    return bool(impure) and any(
+        isinstance(x, m.Call) and x.kind in ("fn", "extern") and x.func in impure for x in m.walk_expr(e))
+
+
+def unordered_operands(e: m.Expr) -> list[m.Expr]:
+    """The operands of `e` whose order of evaluation C and Ada leave to the
+    compiler: both sides of an operator but `and` and `or`, the arguments of
+    a call (functions, built-ins, conversions, record constructors), the
+    array and the index of `a[i]`, the elements of an array literal.  (The
+    condition of `if ... then ... else` comes before its branches in both.)"""
+    if isinstance(e, m.Binary):
+        return [] if e.op in ("and", "or") else [e.left, e.right]
+    if isinstance(e, m.Call):
+        return list(e.args)
+    if isinstance(e, m.Index):
+        return [e.obj, e.index]
+    if isinstance(e, m.ArrayLit):
+        return list(e.items)
+    return []
+
+
+def evaluated_first(e: m.Expr, impure: set[str]) -> list[m.Expr]:
+    """The operands of `e` that a target which leaves their order to its
+    compiler must evaluate into temporaries, in this order, before the rest
+    of `e`, so that externs are called as the language says: operands left
+    to right (docs/language.md, "Order of evaluation").
+
+    Those are the operands that may call an extern, but the last of them:
+    once the earlier ones are in temporaries, it is the only one left with
+    effects, and the others' order does not matter (they only read
+    variables, which an extern cannot write)."""
+    if not impure:
+        return []
+    return [x for x in unordered_operands(e) if calls_impure(x, impure)][:-1]
+
+
 def plan_layout(plan: m.Plan, impure: set[str]) -> list:
     """The rules of `plan` in evaluation order, grouped so that shared tests run once.
 
@@ -211,8 +249,10 @@ def plan_layout(plan: m.Plan, impure: set[str]) -> list:
     same part test it once (a nested Group), and a pure function call that
     several of their conditions make is computed once (`hoist`).  Pure
     functions are total and have no effects, so computing one earlier, or
-    when a short-circuit would have skipped it, changes no result.  A rule
-    that always fires ends the list: nothing after it can fire.
+    when a short-circuit would have skipped it, changes no result.  A part
+    that may call an extern is never shared or hoisted: each rule's
+    condition calls it again, as the simulator does.  A rule that always
+    fires ends the list: nothing after it can fire.
     """
     rules = [r for r in plan.rules if not r.otherwise] + [r for r in plan.rules if r.otherwise and r.state.kind != "any"]
     steps: list[tuple[StateTest | None, list, m.Rule]] = []
@@ -275,7 +315,8 @@ def _by_leading_part(rules: list[tuple[list, m.Rule]], impure: set[str]) -> list
     out: list = []
     i = 0
     while i < len(rules):
-        first = expr_key(rules[i][0][0]) if rules[i][0] else None
+        lead = rules[i][0][0] if rules[i][0] else None
+        first = expr_key(lead) if lead is not None and not calls_impure(lead, impure) else None
         j = i + 1
         while first is not None and j < len(rules) and rules[j][0] and expr_key(rules[j][0][0]) == first:
             j += 1
@@ -295,7 +336,7 @@ def _hoist(rules: list[tuple[list, m.Rule]], impure: set[str]) -> list[tuple[str
         keys = set()
         for part in conds:
             for e in m.walk_expr(part):
-                if isinstance(e, m.Call) and e.kind == "fn" and e.func not in impure:
+                if isinstance(e, m.Call) and e.kind == "fn" and not calls_impure(e, impure):
                     k = expr_key(e)
                     if k not in keys:
                         keys.add(k)
