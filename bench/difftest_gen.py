@@ -83,6 +83,12 @@ MATH_EDGES = ["0.0", "(-0.0)", "0.5", "(-0.5)", "1.5", "2.5", "(-2.5)", "(-3.5)"
               "(0.0 / 0.0)", "(1.0 / 0.0)", "(-1.0 / 0.0)", "2.0", "(-2.0)", "1e16"]
 MATH_FUNCS = ("sqrt", "floor", "ceil", "trunc", "round_even", "copysign", "min", "max")
 DURATIONS = ["0 ms", "10 ms", "20 ms", "30 ms", "50 ms", "100 ms", "1 s", "500 us", "1.5 ms", "2 s"]
+# The "more" stream's edges (DesignGen.more): integer literals where an f64
+# is expected (2^53 + 1 is not a double), durations near the ends of i64
+# nanoseconds, NaN and infinities as scalar values.
+F64_INT_LITERALS = ["2", "0", "(-3)", "7", "1000000", "9007199254740993", "(-2147483648)", "4294967296"]
+BIG_DURATIONS = ["9223372036 s", "(-9223372036 s)", "1000000 s", "9223372036854 ms", "(-1 us)", "1 us"]
+F64_SPECIALS = ["(0.0 / 0.0)", "(1.0 / 0.0)", "(-1.0 / 0.0)", "(-(0.0 / 0.0))"]
 
 # std.math functions by result type: (name, parameter types).
 STD_MATH = {
@@ -270,6 +276,15 @@ class DesignGen:
         self.use_rates = self.mc_rng.random() < 0.45 and features
         self.cpus: list[tuple[str, int, list[Ctrl]]] = []  # (name, heartbeat ms, schedule)
         self.periods: dict[str, int] = {}  # controller -> its period in ms (a divided rate)
+        # More shapes of the language (a stream of its own, so a seed that
+        # draws none keeps its design): subordinates' status read as values,
+        # `in_state` as a value, any condition in a rule, `*` rules of every
+        # kind, integer literals typed f64, constants built from constants,
+        # named and non-positive error codes, math inside expressions, NaN and
+        # infinities as values, durations near the ends of their range.
+        self.x_rng = random.Random(seed ^ 0x7E57)
+        self.more = features and self.x_rng.random() < 0.6
+        self.sub_values: set[str] = set()  # the names of those status values
 
     # ---- types and values ------------------------------------------------------------
 
@@ -289,8 +304,12 @@ class DesignGen:
         if t in INT_TYPES:
             return r.choice(INT_EDGES[t])
         if t == "f64":
+            if self.more and self.x_rng.random() < 0.1:
+                return self.x_rng.choice(F64_SPECIALS)
             return r.choice(FLOAT_EDGES)
         if t == "duration":
+            if self.more and self.x_rng.random() < 0.1:
+                return self.x_rng.choice(BIG_DURATIONS)
             return r.choice(DURATIONS)
         if t in self.enums:
             return f"{t}.{r.choice(self.enums[t])}"
@@ -310,6 +329,22 @@ class DesignGen:
         if t == "i64" and r.random() < 0.3:
             return r.choice(["i64(-1e300)", "9223372036854775807 + 1", "i64(2147483647) * 3"])
         return self.literal(t)
+
+    def derived_const(self, t: str, earlier: list[Var]) -> str:
+        """A constant's value; in the "more" stream, sometimes computed from
+        earlier constants, functions of std.math or the math built-ins."""
+        x = self.x_rng
+        same = [k.name for k in earlier if k.type == t]
+        if not (self.more and t in NUM_TYPES and x.random() < 0.4):
+            return self.const_value(t)
+        k = x.choice(same) if same else self.literal(t, x)
+        if t == "f64":
+            forms = [f"{k} * 2.0", f"-{k}", f"{k} + 0.5", f"sqrt({k})", f"floor({k})", f"min({k}, 1.0)"]
+            if self.std_math:
+                forms += [f"clamp({k}, -1.0, 1.0)", f"sign({k})"]
+            return x.choice(forms)
+        forms = [f"{k} + 1", f"-{k}", f"{k} * 3", f"{k} / 2", f"abs({k})", f"max({k}, {t}(5))"]
+        return x.choice(forms)
 
     # ---- expressions ----------------------------------------------------------------
 
@@ -340,17 +375,35 @@ class DesignGen:
             return r.choice(vars_)
         if consts and choice < 0.85:
             return r.choice(consts)
+        if t == "f64" and anch and self.more and self.x_rng.random() < 0.15:
+            return self.x_rng.choice(F64_INT_LITERALS)
         lit = self.literal(t)
         if t in INT_TYPES and not anch and t != "i32":
             return f"{t}({lit})"
         return f"({lit})" if lit.startswith("-") else lit
 
     def expr(self, t: str, scope: list[Var], depth: int = 3, anch: bool = True) -> str:
+        if t == "f64" and self.more and depth > 0 and self.x_rng.random() < 0.08:
+            return self.with_math(t, self._expr(t, scope, depth - 1, anch), scope, 1)
+        return self._expr(t, scope, depth, anch)
+
+    def _expr(self, t: str, scope: list[Var], depth: int = 3, anch: bool = True) -> str:
         r = self.rng
         self.budget -= 1
         if depth <= 0 or self.budget <= 0 or r.random() < 0.25:
             return self.leaf(t, scope, anch)
         d = depth - 1
+        if self.more and not self.in_fn and t in NUM_TYPES and self.x_rng.random() < 0.12:
+            # Two extern calls as the operands of one operator: the order of
+            # the calls is the language's (left to right), not the compiler's.
+            exts = [(n, [pt for _, pt in ps]) for n, ps, rt in self.externs if rt == t]
+            if exts:
+                calls = []
+                for _ in range(2):
+                    name, params = self.x_rng.choice(exts)
+                    calls.append(f"{name}(" + ", ".join(self.expr(pt, scope, min(d, 1)) for pt in params) + ")")
+                ops = ["+", "-", "*"] + (["/"] if t == "f64" else [])
+                return f"({calls[0]} {self.x_rng.choice(ops)} {calls[1]})"
         if t in NUM_TYPES:
             k = r.random()
             if k < 0.35:
@@ -455,6 +508,15 @@ class DesignGen:
         subordinate (its error is only tested by the `*` rules after them).
         """
         r = self.rng
+        if not in_plan:  # `new` tests no subordinate
+            scope = [v for v in scope if v.name not in self.sub_values]
+        if self.more and self.x_rng.random() < 0.15:
+            self.budget = 6
+            return self.cond(scope, 2)
+        if self.more and self.x_rng.random() < 0.1:
+            call = self.extern_test(scope)
+            if call:
+                return call
         opts = []
         for s in ctrl.subs if in_plan else []:
             opts += [f"{s.name}.done", f"{s.name}.executing", f"(not {s.name}.executing)"]
@@ -486,6 +548,15 @@ class DesignGen:
         return g
 
     # ---- statements -----------------------------------------------------------------
+
+    def extern_test(self, scope: list[Var]) -> str | None:
+        """A call of an extern that returns a bool (the "more" stream), or None."""
+        exts = [(n, [pt for _, pt in ps]) for n, ps, rt in self.externs if rt == "bool"]
+        if not exts or self.in_fn:
+            return None
+        name, params = self.x_rng.choice(exts)
+        self.budget = 4
+        return f"{name}(" + ", ".join(self.expr(pt, scope, 1) for pt in params) + ")"
 
     def lvalues(self, targets: list[Var]) -> list[tuple[str, str]]:
         """Assignable places: variables and their record fields."""
@@ -1001,6 +1072,8 @@ class DesignGen:
         r = self.rng
         n = self.names
         scope = scope + [Var(f"cmd.{p}", t) for p, t in params if t not in self.arrays]
+        if self.more and self.x_rng.random() < 0.3:
+            scope = scope + [Var("in_state", "duration")]
         saved_actx = self.actx
         self.actx = (self.actx or []) + [(f"cmd.{p}", t) for p, t in params if t in self.arrays]
         states = [n.fresh("S", upper=True) for _ in range(r.randint(0, 3))]
@@ -1015,6 +1088,10 @@ class DesignGen:
             rules.append(f"        {next(labels)}: {cond} | {state} -> {nxt}" + (f" | {jobs};" if jobs else ";"))
 
         def end() -> str:
+            x = self.x_rng
+            if self.more and x.random() < 0.25:
+                named = [k.name for k in self.consts if k.type == "i32"]
+                return x.choice(["error(0)", "error(-5)", "error(2147483647)"] + [f"error({k})" for k in named] * 2)
             return r.choice(["done", f"error({r.randint(1, 99)})", "done"])
 
         first = states[0] if states else end()
@@ -1032,10 +1109,19 @@ class DesignGen:
         if states:
             for s in c.subs:
                 rule(f"{s.name}.error", "*", f"error({r.randint(1, 99)})")
+            x = self.x_rng
+            if self.more and x.random() < 0.4:
+                # A `*` rule of another kind: any condition, any target.
+                self.budget = 6
+                rule(self.guard(scope, c, True), "*", x.choice(states + ["*", "done", end()]))
         for i, st in enumerate(states):
             targets_ = states + ["*", "done", f"error({r.randint(1, 99)})"]
+            # Rules whose conditions start alike, with an extern call: each
+            # condition evaluated calls it again (nothing shared between rules).
+            shared = self.extern_test(scope) if self.more and self.x_rng.random() < 0.3 else None
             for _ in range(r.randint(0, 2)):
-                rule(self.guard(scope, c, True), st, r.choice(targets_))
+                g = self.guard(scope, c, True)
+                rule(f"({shared} and {g})" if shared else g, st, r.choice(targets_))
             if i + 1 < len(states):
                 rule(self.guard(scope, c, True), st, states[i + 1])
             if r.random() < 0.3:
@@ -1067,8 +1153,8 @@ class DesignGen:
             out.append(f"const {lname}: i32 = {size}")
         for rec in self.arecords.values():
             out.append(f"record {rec.name} {{ " + ", ".join(f"{f}: {t}" for f, t in rec.fields) + " }")
-        for cst in self.consts:
-            out.append(f"const {cst.name}: {cst.type} = {self.const_value(cst.type)}")
+        for i, cst in enumerate(self.consts):
+            out.append(f"const {cst.name}: {cst.type} = {self.derived_const(cst.type, self.consts[:i])}")
         for cst in self.aconsts:
             out.append(f"const {cst.name}: {cst.type} = {self.literal(cst.type, a)}")
         for i, (fname, params, ret) in enumerate(self.fns):
@@ -1124,6 +1210,12 @@ class DesignGen:
             scope = c.reads + targets
             for s in c.subs:  # the supervisor's view of a subordinate's status fields
                 scope = scope + [Var(f"{s.name}.{v.name}", v.type) for v in s.status]
+                if self.more and self.x_rng.random() < 0.5:
+                    # Its status as values, outside rule conditions too (`fault = S.error_code`).
+                    values = [Var(f"{s.name}.error_code", "i32"), Var(f"{s.name}.done", "bool"),
+                              Var(f"{s.name}.error", "bool"), Var(f"{s.name}.executing", "bool")]
+                    self.sub_values.update(v.name for v in values)
+                    scope = scope + values
                 # A block's outputs are status fields of its controller, `INSTANCE__OUTPUT`.
                 for inst, _, _, _, outputs in (s.instance_of or s).blocks:
                     scope += [Var(f"{s.name}.{inst}__{o}", t) for o, t in outputs if self.blk_rng.random() < 0.6]

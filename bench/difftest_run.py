@@ -29,6 +29,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from difftest_externs import ada_source, c_source, externs_of, python_externs, rust_source
 from difftest_gen import Case, solver_cache
 
 STRICT = ["-std=c99", "-Wall", "-Wextra", "-Wpedantic", "-Wconversion", "-Wshadow", "-Werror", "-ffp-contract=off"]
@@ -71,6 +72,7 @@ class Prepared:
     events: Path | None = None  # the scenario compiled for the Main Programs (`rcsc events`)
     reference: bytes = b""
     findings: list[Finding] = field(default_factory=list)
+    model: object = None  # the checked design (rcsc.semantics.model.Design)
 
 
 def _rcsc(argv: list[str]) -> tuple[int, str]:
@@ -118,7 +120,10 @@ def prepare(case: Case, base: Path) -> Prepared:
     p.events = folder / f"{case.name}.events"
     p.events.write_text(event_text(result.model, sc, built_controllers(result.model, BuildOptions())), encoding="utf-8")
     try:
-        run = run_scenario(result.model, sc)
+        # The externs keep a journal of their calls (bench/difftest_externs.py):
+        # each target gets the same implementation, written before `rcsc build`.
+        p.model = result.model
+        run = run_scenario(result.model, sc, externs=python_externs(result.model))
         p.reference = run_to_jsonl(result.model, run).encode("utf-8")
     except Exception as exc:  # a crash of the simulator is a finding, not the end of the run
         p.findings.append(Finding(case.seed, "crash", "rcsc sim", f"{type(exc).__name__}: {exc}"))
@@ -178,6 +183,10 @@ def c_programs(src: Path) -> list[tuple[str, list[str]]]:
 
 def c_generate(p: Prepared) -> list[Finding]:
     """`rcsc build --target c` of one case (in the main thread: it redirects stderr)."""
+    if p.model is not None and externs_of(p.model):  # type: ignore[arg-type]
+        name, text = c_source(p.model)  # type: ignore[arg-type]
+        (p.folder / "c").mkdir(parents=True, exist_ok=True)
+        (p.folder / "c" / name).write_text(text, encoding="utf-8")
     rc, err = _rcsc(["build", str(p.design), "--target", "c", "-o", str(p.folder / "c")])
     return [] if rc == 0 else [Finding(p.case.seed, "crash", "rcsc build c", err[-3000:])]
 
@@ -250,6 +259,10 @@ def c_case(p: Prepared, configs: list[str]) -> list[Finding]:
 
 def ada_generate(p: Prepared) -> list[Finding]:
     """`rcsc build --target ada` of one case (in the main thread: it redirects stderr)."""
+    if p.model is not None and externs_of(p.model):  # type: ignore[arg-type]
+        name, text = ada_source(p.model)  # type: ignore[arg-type]
+        (p.folder / "ada").mkdir(parents=True, exist_ok=True)
+        (p.folder / "ada" / name).write_text(text, encoding="utf-8")
     rc, err = _rcsc(["build", str(p.design), "--target", "ada", "-o", str(p.folder / "ada")])
     return [] if rc == 0 else [Finding(p.case.seed, "crash", "rcsc build ada", err[-3000:])]
 
@@ -295,6 +308,9 @@ def rust_generate(prepared: list[Prepared], base: Path) -> tuple[list[Prepared],
     profiles = None
     for p in prepared:
         crate = ws / p.case.name
+        if p.model is not None and externs_of(p.model):  # type: ignore[arg-type]
+            (crate / "src").mkdir(parents=True, exist_ok=True)
+            (crate / "src" / "externs_impl.rs").write_text(rust_source(p.model), encoding="utf-8")  # type: ignore[arg-type]
         rc, err = _rcsc(["build", str(p.design), "--target", "rust", "-o", str(crate)])
         if rc != 0:
             out.append(Finding(p.case.seed, "crash", "rcsc build rust", err[-3000:]))

@@ -111,6 +111,16 @@ def test_generator_covers_the_language() -> None:
         "function returning an array": r"^fn arfun\d+\(xs: \[.*\) -> \[", "array function call": r"\barfun\d+\(",
         "simulator type": r"^simulator type ", "simulator instance": r"^simulator \w+: Ty\d+\(",
         "subordinate block output": r"\bC\d+\.fb\d+__\w+",
+        # the "more" stream (DesignGen.more)
+        "subordinate status as a value": r"= [^|;\n]*\bC\d+\.(error_code|done|error|executing)\b[^|\n]*;",
+        "in_state as a value": r"[=(,+\-*] ?in_state\b(?! *(>=|<) *\d+ ms)",
+        "two extern calls in one operator": r"\bext\d+_\d+\([^;|]*\) [-+*/] ext\d+_\d+\(",
+        "extern call in a condition": r": \(?ext\d+_\d+\(", "error(0) or negative": r"error\((0|-5)\)",
+        "star rule to a state or done": r"\| \* -> (S\d+|done)", "constant from a constant": r"^const K\d+: \w+ = -?K\d+",
+        "constant from math": r"^const K\d+: \w+ = (sqrt|floor|min|abs|max|clamp|sign)\(",
+        "duration near its ends": r"9223372036 s|1000000 s|9223372036854 ms",
+        "integer literal as f64": r"(?<![\w.])(9007199254740993|1000000)(?![\w.])",
+        "NaN scalar value": r"^gm \w+: f64 = \(-?\(?0\.0 / 0\.0",
     }
     missing = [k for k, pat in wanted.items() if not re.search(pat, text, re.M)]
     assert missing == []
@@ -187,3 +197,35 @@ def test_the_generator_draws_untyped_if_literals_and_externs() -> None:
         lines = d.splitlines()
         bodies = [lines[i + 1] for i, line in enumerate(lines) if line.startswith("fn ")]
         assert not any(re.search(r"\bext\d+_\d+\(", b) for b in bodies)
+
+
+def test_the_externs_keep_a_journal() -> None:
+    """The tester's externs (bench/difftest_externs.py) make the calls visible:
+    with them, the simulator's trace of a design that calls externs differs
+    from the one with the stubs' zero values; each target's file implements
+    every extern."""
+    import tempfile
+
+    from difftest_externs import c_source, externs_of, python_externs, rust_source
+
+    from rcsc.diagnostics import Diagnostics
+    from rcsc.driver import check_path
+    from rcsc.front.scenario import text_to_scenario
+    from rcsc.front.source import SourceFile
+    from rcsc.sim.runner import run_scenario
+    from rcsc.sim.trace import run_to_jsonl
+
+    case = next(c for c in map(case_of, range(3, 40)) if re.search(r"\bext\d+_\d+\(\w", c.design.split("extern fn", 1)[-1]))
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / f"{case.name}.rcs"
+        path.write_text(case.design, encoding="utf-8")
+        model = check_path(str(path)).model
+    assert model is not None
+    sc = text_to_scenario(SourceFile("s.scn", case.scenario), model, Diagnostics())
+    assert sc is not None
+    journal = run_to_jsonl(model, run_scenario(model, sc, externs=python_externs(model)))
+    assert journal != run_to_jsonl(model, run_scenario(model, sc))
+    c_name, c_text = c_source(model)
+    assert c_name.endswith("_externs.c")
+    assert len(re.findall(r"\)\n\{\n    dt_mix\(\d+\);", c_text)) == len(externs_of(model))
+    assert len(re.findall(r"^        self\.mix\(\d+\);", rust_source(model), re.M)) == len(externs_of(model))
