@@ -123,7 +123,8 @@ def prepare(case: Case, base: Path) -> Prepared:
         # The externs keep a journal of their calls (bench/difftest_externs.py):
         # each target gets the same implementation, written before `rcsc build`.
         p.model = result.model
-        run = run_scenario(result.model, sc, externs=python_externs(result.model))
+        model = result.model
+        run = run_scenario(model, sc, externs=lambda: python_externs(model))  # one journal per CPU
         p.reference = run_to_jsonl(result.model, run).encode("utf-8")
     except Exception as exc:  # a crash of the simulator is a finding, not the end of the run
         p.findings.append(Finding(case.seed, "crash", "rcsc sim", f"{type(exc).__name__}: {exc}"))

@@ -13,12 +13,15 @@ Each compiler configuration is compared with the simulator, byte for byte.
 from __future__ import annotations
 
 import importlib.util
+import json
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
-from c_build import ADA_OPTS, C_CONFIGS, compile_c, cargo_build, first_difference, generate, gprbuild, run_main
+from c_build import ADA_OPTS, C_CONFIGS, ROOT, cargo_build, compile_c, event_file, first_difference, generate, gprbuild, run_main
 from rcsc.driver import check_path
 from rcsc.front.scenario import text_to_scenario
 from rcsc.front.source import SourceFile
@@ -107,3 +110,62 @@ def test_ada_calls_externs_as_the_simulator(opt: str, tmp_path: Path, reference:
     exe = tmp_path / "main"
     gprbuild(_source("ada", tmp_path), opt, exe)
     _compare(exe, tmp_path, reference)
+
+
+# ---- several CPUs: each has its own externs ---------------------------------------------------
+
+PERCPU = HERE / "percpu.rcs"
+PERCPU_SCN = HERE / "percpu.scn"
+
+
+def _journal_sim(design_path: Path, scn: Path, per_cpu: bool) -> bytes:
+    sys.path.insert(0, str(ROOT / "bench"))
+    from difftest_externs import python_externs
+
+    result = check_path(str(design_path))
+    assert result.ok and result.model is not None
+    model = result.model
+    sc = text_to_scenario(SourceFile(str(scn), scn.read_text(encoding="utf-8")), model, result.diags)
+    assert sc is not None
+    externs = (lambda: python_externs(model)) if per_cpu else python_externs(model)
+    return run_to_jsonl(model, run_scenario(model, sc, externs=externs)).encode("utf-8")
+
+
+def test_each_cpu_of_the_simulator_has_its_own_externs() -> None:
+    """A function given as `externs` is called once per CPU: FAST's calls do
+    not move SLOW's journal (a shared dictionary would)."""
+    sys.path.insert(0, str(ROOT / "bench"))
+    from difftest_externs import python_externs
+
+    own, shared = _journal_sim(PERCPU, PERCPU_SCN, True), _journal_sim(PERCPU, PERCPU_SCN, False)
+    assert own != shared
+    # FAST calls tick(1), then tick(2), in each of its cycles (the trace's
+    # lines of CPU fast): with a journal of its own, its values are those of
+    # a journal that sees only its calls.
+    model = check_path(str(PERCPU)).model
+    assert model is not None
+    tick = python_externs(model)["tick"]
+    fast = [x["gm"]["fast_out"] for x in map(json.loads, own.decode().splitlines()) if x["cpu"] == "fast"]
+    assert len(fast) == 8 and fast == [tick(1) + tick(2) for _ in fast]
+
+
+def test_c_launcher_calls_externs_per_cpu_as_the_simulator(tmp_path: Path) -> None:
+    sys.path.insert(0, str(ROOT / "bench"))
+    from difftest_externs import c_source
+
+    result = check_path(str(PERCPU))
+    assert result.model is not None
+    src = tmp_path / "c"
+    src.mkdir()
+    name, text = c_source(result.model)
+    (src / name).write_text(text, encoding="utf-8")
+    generate(PERCPU, "c", src)
+    assert (src / name).read_text(encoding="utf-8") == text
+    proc = subprocess.run(["make", "-s", "CFLAGS=-O2 -Werror"], cwd=src, capture_output=True, text=True)
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+    trace = tmp_path / "trace.jsonl"
+    run = subprocess.run([str(src / "run_percpu"), "--lockstep", "--no-timing", "--scenario", str(event_file(PERCPU, PERCPU_SCN)),
+                          "--trace", str(trace)], capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
+    assert run.returncode == 0, run.stderr
+    want = _journal_sim(PERCPU, PERCPU_SCN, True)
+    assert trace.read_bytes() == want, first_difference(want, trace.read_bytes())

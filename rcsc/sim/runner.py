@@ -11,6 +11,8 @@ writer's CPU, inputs as the scenario last set them).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from dataclasses import dataclass, field
 
 from rcsc.semantics import model as m
@@ -171,8 +173,16 @@ def observe(system: System) -> Snapshot:
     return observed_snapshot(system)
 
 
-def run_scenario(design: m.Design, sc: Scenario, externs: dict | None = None, step_log: list[str] | None = None) -> RunResult:
-    """Runs `sc`; with `step_log`, appends a line per step to it (Simulator.step_log)."""
+def run_scenario(design: m.Design, sc: Scenario, externs: dict | Callable[[], dict] | None = None,
+                 step_log: list[str] | None = None) -> RunResult:
+    """Runs `sc`; with `step_log`, appends a line per step to it (Simulator.step_log).
+
+    `externs` implements the design's extern functions (name -> Python
+    callable taking and returning simulator values); an extern without one
+    returns its type's zero value, as the targets' stubs do.  With several
+    CPUs, pass a function that makes the dictionary: it is called once per
+    CPU, so that an extern that keeps state keeps it per CPU, as in the
+    compiled programs (one process per CPU)."""
     system = System(design, externs)
     if step_log is not None:
         for sim in system.cpus.values():

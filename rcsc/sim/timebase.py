@@ -21,6 +21,8 @@ A single-CPU design is the case of one CPU whose base tick is its heartbeat.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from dataclasses import dataclass
 
 from rcsc.semantics import model as m
@@ -49,10 +51,14 @@ class _Publication:
 class System:
     """Runs every CPU of a design on the common time base."""
 
-    def __init__(self, design: m.Design, externs: dict | None = None) -> None:
+    def __init__(self, design: m.Design, externs: dict | Callable[[], dict] | None = None) -> None:
+        """`externs`: the extern functions' implementations by name (see
+        `run_scenario`), or a function that makes them for one CPU, called
+        once per CPU: each CPU's Main Program has its own, so an extern that
+        keeps state keeps it per CPU."""
         self.design = design
         self.base_ns = design.base_tick_ns
-        self.cpus = {name: Simulator(design, externs, cpu) for name, cpu in design.cpus.items()}
+        self.cpus = {name: Simulator(design, externs() if callable(externs) else externs, cpu) for name, cpu in design.cpus.items()}
         self.tick_count = 0
         self.stopped: set[str] = set()
         self._events: dict[str, list[Event]] = {name: [] for name in design.cpus}
