@@ -89,6 +89,12 @@ DURATIONS = ["0 ms", "10 ms", "20 ms", "30 ms", "50 ms", "100 ms", "1 s", "500 u
 F64_INT_LITERALS = ["2", "0", "(-3)", "7", "1000000", "9007199254740993", "(-2147483648)", "4294967296"]
 BIG_DURATIONS = ["9223372036 s", "(-9223372036 s)", "1000000 s", "9223372036854 ms", "(-1 us)", "1 us"]
 F64_SPECIALS = ["(0.0 / 0.0)", "(1.0 / 0.0)", "(-1.0 / 0.0)", "(-(0.0 / 0.0))"]
+# Doc comments, which every target copies into a comment of its own: the
+# ends and openings of C, Rust and Ada comments, a line-continuing
+# backslash, a trigraph, format and markup characters, non-ASCII text.
+DOC_TEXTS = ["ends with a backslash \\", "closes */ a C comment", "opens /* one", "a trigraph ??/", "an Ada -- comment",
+             "a Rust //! doc and #[attr]", "units: µs, °C, ±0.5 — done", "tab\tinside", "`code`, *stars* and %d %s {}",
+             "quotes \" and ' and \\n", "}}} {{{ {% raw %}", "ends with a slash /"]
 
 # std.math functions by result type: (name, parameter types).
 STD_MATH = {
@@ -329,6 +335,12 @@ class DesignGen:
         if t == "i64" and r.random() < 0.3:
             return r.choice(["i64(-1e300)", "9223372036854775807 + 1", "i64(2147483647) * 3"])
         return self.literal(t)
+
+    def doc(self, indent: str = "") -> list[str]:
+        """Sometimes (the "more" stream) a `///` doc comment for the item that follows."""
+        if not (self.more and self.x_rng.random() < 0.25):
+            return []
+        return [f"{indent}/// {self.x_rng.choice(DOC_TEXTS)}" for _ in range(self.x_rng.choice([1, 1, 2]))]
 
     def derived_const(self, t: str, earlier: list[Var]) -> str:
         """A constant's value; in the "more" stream, sometimes computed from
@@ -1085,6 +1097,7 @@ class DesignGen:
         def rule(cond: str, state: str, nxt: str) -> None:
             self.budget = 6
             jobs = self.jobs(c, targets, scope, bool(states))
+            rules.extend(self.doc("        "))
             rules.append(f"        {next(labels)}: {cond} | {state} -> {nxt}" + (f" | {jobs};" if jobs else ";"))
 
         def end() -> str:
@@ -1154,10 +1167,12 @@ class DesignGen:
         for rec in self.arecords.values():
             out.append(f"record {rec.name} {{ " + ", ".join(f"{f}: {t}" for f, t in rec.fields) + " }")
         for i, cst in enumerate(self.consts):
+            out += self.doc()
             out.append(f"const {cst.name}: {cst.type} = {self.derived_const(cst.type, self.consts[:i])}")
         for cst in self.aconsts:
             out.append(f"const {cst.name}: {cst.type} = {self.literal(cst.type, a)}")
         for i, (fname, params, ret) in enumerate(self.fns):
+            out += self.doc()
             out.append(self.function(fname, params, ret, i))
         for fname, at, it, ret, body in self.afns:
             out.append(f"fn {fname}(xs: {at}, i: {it}) -> {ret} =\n    {body}")
@@ -1168,6 +1183,7 @@ class DesignGen:
         for bname in self.user_blocks:
             out += self.user_block(bname)
         for v in self.env:
+            out += self.doc()
             out.append(f"gm {v.name}: {v.type} = {self.literal(v.type)} from env")
         for v in self.aenv:
             out.append(f"gm {v.name}: {v.type} = {self.literal(v.type, a)} from env")
@@ -1185,6 +1201,7 @@ class DesignGen:
                 out.append(f"{kind} type {c.type_name}({', '.join(tps)}) level {c.level} budget 100 us {{")
             else:
                 period = f" period {self.periods[c.name]} ms" if c.name in self.periods else ""
+                out += self.doc()
                 out.append(f"{kind} {c.name} level {c.level} budget 100 us{period} {{")
             if c.subs:
                 out.append(f"    subordinates {', '.join(s.name for s in c.subs)}")
@@ -1251,7 +1268,7 @@ class DesignGen:
         if not self.use_rates:
             self.cpus = [("MAIN", HEARTBEAT_MS, order)]
         for cpu, beat, here in self.cpus:
-            out += [f"cpu {cpu} {{", f"    heartbeat {beat} ms", f"    schedule {', '.join(c.name for c in here)}", "}", ""]
+            out += self.doc() + [f"cpu {cpu} {{", f"    heartbeat {beat} ms", f"    schedule {', '.join(c.name for c in here)}", "}", ""]
         return "\n".join(out)
 
     def scenario(self) -> str:

@@ -121,6 +121,7 @@ def test_generator_covers_the_language() -> None:
         "duration near its ends": r"9223372036 s|1000000 s|9223372036854 ms",
         "integer literal as f64": r"(?<![\w.])(9007199254740993|1000000)(?![\w.])",
         "NaN scalar value": r"^gm \w+: f64 = \(-?\(?0\.0 / 0\.0",
+        "doc comment closing a C comment": r"^\s*/// .*\*/", "doc comment ending in a backslash": r"^\s*/// .*\\$",
     }
     missing = [k for k, pat in wanted.items() if not re.search(pat, text, re.M)]
     assert missing == []
