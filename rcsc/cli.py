@@ -430,6 +430,8 @@ def _add_sim_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", metavar="FILE", help="write the trace to FILE instead of stdout")
     p.add_argument("--step-log", metavar="FILE", help="also write one line per step (controller, verb, state, rule) to FILE, "
                    "as the compiled Main Program's --step-log")
+    p.add_argument("--externs", metavar="FILE.py", help="Python functions standing in for the design's extern functions "
+                   "(without: they return zero values; see docs/scenarios.md)")
 
 
 def _checked_scenario(design_path: str, scenario_path: str):
@@ -455,6 +457,7 @@ def _checked_scenario(design_path: str, scenario_path: str):
 
 
 def _run_sim(args: argparse.Namespace) -> int:
+    from rcsc.sim import externs as sim_externs
     from rcsc.sim import trace
     from rcsc.sim.runner import run_scenario
 
@@ -462,8 +465,22 @@ def _run_sim(args: argparse.Namespace) -> int:
     if loaded is None:
         return EXIT_FINDINGS
     design, sc = loaded
+    externs = None
+    if args.externs:
+        diags = Diagnostics()
+        externs = sim_externs.load(args.externs, design, diags)
+        if diags.items:
+            _report_to_stderr(diags)
+        if externs is None:
+            return EXIT_FINDINGS
     steps: list[str] | None = [] if args.step_log else None
-    run = run_scenario(design, sc, step_log=steps)
+    try:
+        run = run_scenario(design, sc, externs=externs, step_log=steps)
+    except sim_externs.ExternFailed as exc:
+        diags = Diagnostics()
+        exc.report(diags)
+        _report_to_stderr(diags)
+        return EXIT_FINDINGS
     if steps is not None:
         _emit_report("".join(x + "\n" for x in steps), args.step_log)
     fmt = args.trace_format
@@ -588,11 +605,15 @@ def _add_test_arguments(p: argparse.ArgumentParser) -> None:
         help="run the scenarios in the simulator (default) or on the compiled Main Program (built once, see docs/events.md)",
     )
     p.add_argument("--build-dir", metavar="DIR", default="build/rcsc-test", help="where --target c|rust|ada builds the design (default: build/rcsc-test)")
+    p.add_argument("--externs", metavar="FILE.py", help="in the simulator: Python functions standing in for the extern functions "
+                   "(see docs/scenarios.md)")
 
 
 def _run_test(args: argparse.Namespace) -> int:
     from rcsc.sim import testrun
 
+    if args.externs and args.target != "sim":
+        raise UsageError("--externs is for the simulator: a compiled Main Program uses the externs you wrote for its target")
     plan, problems = testrun.discover(args.paths)
     for problem in problems:
         _error(problem)
@@ -602,7 +623,7 @@ def _run_test(args: argparse.Namespace) -> int:
         if not scenarios:
             continue
         for scn in scenarios:
-            outcome = testrun.run_one(design, scn, cache, args.target, args.build_dir)
+            outcome = testrun.run_one(design, scn, cache, args.target, args.build_dir, externs=args.externs)
             report.outcomes.append(outcome)
             word = "PASS" if outcome.passed else "FAIL"
             unit = "ticks" if outcome.result is not None and outcome.result.multi_cpu else "cycles"

@@ -1082,6 +1082,62 @@ the run has no end; with two `cycles` lines it is ambiguous which one counts.
 freezes one controller (it is not stepped any more). The name after `stop` must
 be one of the design's CPUs and the name after `freeze` one of its controllers.
 """),
+    ("E0830", _E, "the simulator's externs file does not load", """
+`rcsc sim --externs FILE.py` (and `rcsc test --externs`) runs the design
+with Python functions standing in for its extern functions. The file could
+not be read, is not valid Python, raised an exception while it was loaded,
+or its `externs()` function raised or returned something else than a dict of
+functions by name. Nothing is simulated: a run without the externs the file
+meant to give would not be the design's.
+
+Wrong (externs.py):
+
+    def path_length(dx, dy)
+        return math.hypot(dx, dy)
+
+Fixed:
+
+    import math
+
+    def path_length(dx, dy):
+        return math.hypot(dx, dy)
+"""),
+    ("W0830", _W, "an extern has no implementation in the simulator's externs file", """
+The externs file given with `--externs` defines no function named like this
+extern (or its `externs()` dict has no such key), so in the simulator the
+extern returns the zero value of its type, as without the file. Or the
+`externs()` dict names a function the design does not declare. Usually a
+typo: the finding names the closest function the file defines.
+
+Wrong (externs.py, for `extern fn path_length(dx: f64, dy: f64) -> f64`):
+
+    def pathlength(dx, dy):
+        return math.hypot(dx, dy)
+
+Fixed:
+
+    def path_length(dx, dy):
+        return math.hypot(dx, dy)
+"""),
+    ("E0831", _E, "an extern failed in the simulator", """
+A Python function standing in for an extern (`--externs FILE.py`) raised an
+exception, or returned a value that is not of the extern's type: an `int` in
+range for the integer types and `duration` (nanoseconds), an `int` or
+`float` for `f64`, a `bool`, an enum member's name, a `dict` with exactly
+the record's fields, a `list` of the array's length. The run stops there:
+the trace after it would not be the design's. The note says where the
+function raised.
+
+Wrong (for `extern fn gear_of(rpm: f64) -> i32`):
+
+    def gear_of(rpm):
+        return rpm / 1000.0
+
+Fixed:
+
+    def gear_of(rpm):
+        return int(rpm // 1000)
+"""),
     ("E0810", _E, "no running Main Program to attach the console to", """
 `rcsc console DESIGN` attaches to a Main Program of that design that was
 started with `--run ID`: the program then publishes its status and takes

@@ -16,7 +16,9 @@ scenarios); the annotations of every `.rcs` and `.scn` file in the folder
 count.  Every `*.scn` file of a folder is checked as a scenario of the design
 (`rcsc.front.scenario.text_to_scenario`), except `sim.scn`, which is run with
 `rcsc sim` when the design has no errors (for the findings only that command
-reports; they are read from its human-readable output), and except folders
+reports; they are read from its human-readable output; with `--externs
+externs.py` when the folder has that file, whose `# expect:` lines count
+too), and except folders
 with a file `build-target` (holding a target name, then any other build
 options, e.g. `c --transport dds`), where `rcsc build --target NAME ...` runs
 and its findings count too.  Cases named `ok_*`
@@ -42,6 +44,9 @@ CASES = Path(__file__).parent / "cases"
 ROOT_FILE = "main.rcs"
 
 SIM_SCENARIO = "sim.scn"
+# A folder case with this file runs `sim.scn` with `--externs externs.py`
+# (annotations in it are `# expect: CODE @ LINE:COL`).
+EXTERNS = "externs.py"
 # A folder case with this file is checked under it, as `rcsc check` does
 # (annotations in it are `# expect: CODE @ LINE:COL`).
 CONFIG = "rcsc.toml"
@@ -79,7 +84,8 @@ def _roots() -> list[Path]:
 def _case_files(root: Path) -> list[Path]:
     if root.parent == CASES:
         return [root]
-    return sorted(root.parent.rglob("*.rcs")) + sorted(root.parent.rglob("*.scn")) + sorted(root.parent.glob(CONFIG))
+    return (sorted(root.parent.rglob("*.rcs")) + sorted(root.parent.rglob("*.scn")) + sorted(root.parent.glob(CONFIG))
+            + sorted(root.parent.glob(EXTERNS)))
 
 
 def _annotations(path: Path) -> list[tuple[str, int, int]]:
@@ -162,7 +168,8 @@ def _sim_findings(root: Path, ok: bool) -> Counter:
 
     err = io.StringIO()
     with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-        rc = cli.main(["sim", str(root), "--scenario", str(scn), "-o", os.devnull])
+        externs = ["--externs", str(root.parent / EXTERNS)] if (root.parent / EXTERNS).is_file() else []
+        rc = cli.main(["sim", str(root), "--scenario", str(scn), "-o", os.devnull, *externs])
     if _case_id(root).startswith("ok_"):
         assert rc == 0, f"rcsc sim exited with {rc}:\n{err.getvalue()}"
     return Counter(

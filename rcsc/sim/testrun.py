@@ -122,9 +122,11 @@ def failure_text(result: RunResult) -> str:
     return "\n".join(lines)
 
 
-def run_one(design_path: str, scenario_path: str, design_cache: dict, target: str = "sim", build_root: str = "build/rcsc-test") -> Outcome:
-    """One scenario in the simulator (`target` "sim") or on the design's
-    compiled Main Program (`target` "c" or "rust", built under `build_root`)."""
+def run_one(design_path: str, scenario_path: str, design_cache: dict, target: str = "sim", build_root: str = "build/rcsc-test",
+            externs: str | None = None) -> Outcome:
+    """One scenario in the simulator (`target` "sim", with the Python externs
+    of the file `externs`, rcsc.sim.externs) or on the design's compiled
+    Main Program (`target` "c" or "rust", built under `build_root`)."""
     start = time.perf_counter()
     if design_path not in design_cache:
         try:
@@ -145,7 +147,21 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict, target: st
     if sc is None:
         return Outcome(design_path, scenario_path, False, 0.0, message="the scenario has errors", diags=diags)
     if target == "sim":
-        result = run_scenario(checked.model, sc)
+        from rcsc.sim import externs as sim_externs
+
+        key = ("externs", design_path)
+        if externs and key not in design_cache:
+            loading = Diagnostics()
+            design_cache[key] = (sim_externs.load(externs, checked.model, loading), loading)
+        made, loading = design_cache.get(key, (None, None))
+        if loading is not None and loading.has_errors():
+            return Outcome(design_path, scenario_path, False, 0.0, message="the externs file does not load", diags=loading)
+        try:
+            result = run_scenario(checked.model, sc, externs=made)
+        except sim_externs.ExternFailed as exc:
+            failed = Diagnostics()
+            exc.report(failed)
+            return Outcome(design_path, scenario_path, False, time.perf_counter() - start, message="an extern failed", diags=failed)
     else:
         from pathlib import Path
 
