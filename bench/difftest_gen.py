@@ -654,6 +654,8 @@ class DesignGen:
         if nested and self.arrays and a.random() < 0.1:
             elem = a.choice(sorted(self.arrays))  # an array of arrays
         n = a.randint(1, 5)
+        if self.more and self.x_rng.random() < 0.1:
+            n = self.x_rng.choice([17, 64, 300])  # longer arrays: loops over them, not unrolled code
         size = str(n)
         if self.len_consts and a.random() < 0.4:
             size, n = a.choice(self.len_consts)
@@ -1267,8 +1269,13 @@ class DesignGen:
             r.shuffle(order)
         if not self.use_rates:
             self.cpus = [("MAIN", HEARTBEAT_MS, order)]
+        one_beat = None
+        if not self.use_rates and self.more and self.x_rng.random() < 0.3:
+            # The heartbeat in other units and lengths: time-outs written in
+            # ms then fall between steps (rounded up to the next one, W0601).
+            one_beat = self.x_rng.choice(["10000 us", "1500 us", "2 ms", "250 us", "1 s"])
         for cpu, beat, here in self.cpus:
-            out += self.doc() + [f"cpu {cpu} {{", f"    heartbeat {beat} ms", f"    schedule {', '.join(c.name for c in here)}", "}", ""]
+            out += self.doc() + [f"cpu {cpu} {{", f"    heartbeat {one_beat or f'{beat} ms'}", f"    schedule {', '.join(c.name for c in here)}", "}", ""]
         return "\n".join(out)
 
     def scenario(self) -> str:
