@@ -126,6 +126,7 @@ def test_a_call_that_raises_stops_the_run_with_the_line(folder: Path) -> None:
     assert rc == 1 and lines == []
     assert "error[E0831]: extern `count` failed in the simulator: it raised ZeroDivisionError" in err
     assert f"raised at {folder / 'ext.py'}:2" in err
+    assert "called in cycle 1 of CPU MAIN, controller K" in err
 
 
 def test_a_file_that_raises_while_loading_is_e0830_at_the_line(folder: Path) -> None:

@@ -32,10 +32,10 @@ from rcsc.diagnostics import Diagnostics
 from rcsc.front.source import SourceFile, Span
 from rcsc.semantics import model as m
 from rcsc.semantics.types import BOOL, DURATION, ArrayType, EnumType, FloatType, IntType, RecordType, Type
-from rcsc.sim.simulate import clone
+from rcsc.sim.simulate import ExternCallError, clone
 
 
-class ExternFailed(Exception):
+class ExternFailed(ExternCallError):
     """A call of a Python extern raised, or returned a value of another type (E0831)."""
 
     def __init__(self, func: m.Function, message: str, where: str) -> None:
@@ -46,6 +46,8 @@ class ExternFailed(Exception):
 
     def report(self, diags: Diagnostics) -> None:
         d = diags.add("E0831", name_span(self.func), f"extern `{self.func.name}` failed in the simulator: {self.message}", "this extern")
+        if self.step:
+            d.with_note(f"called {self.step}")
         if self.where:
             d.with_note(self.where)
         d.with_help("fix the Python function, or run without --externs (the extern then returns zero values)")

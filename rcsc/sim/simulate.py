@@ -99,6 +99,13 @@ class ControllerRuntime:
         self.gm_uses = c.reads + c.writes
 
 
+class ExternCallError(Exception):
+    """A Python stand-in for an extern failed (`rcsc.sim.externs`); `step`
+    says where the run was, filled in by the step that made the call."""
+
+    step = ""
+
+
 class _StepEnv(Env):
     """What an expression reads during one controller step."""
 
@@ -155,7 +162,12 @@ class _StepEnv(Env):
         impl = self.sim.externs.get(e.func)
         if impl is None:
             return zero_value(e.type)
-        return impl(*args)
+        try:
+            return impl(*args)
+        except ExternCallError as exc:
+            if not exc.step:
+                exc.step = f"in cycle {self.sim.cycle} of CPU {self.sim.cpu.name}, controller {self.rt.c.name}"
+            raise
 
     def function(self, name: str) -> m.Function:
         return self.sim.design.functions[name]
