@@ -94,6 +94,8 @@ def _examples() -> list[tuple[Path, Path]]:
     pairs.append((ROOT / "tests/mathfn/mathfn.rcs", ROOT / "tests/mathfn/mathfn.scn"))
     # Arrays in every position, indices out of range (docs/language.md §4).
     pairs.append((ROOT / "tests/arrays/arrays.rcs", ROOT / "tests/arrays/arrays.scn"))
+    # Arrays only as Global Memory outputs (the Rust Main Program's imports).
+    pairs.append((ROOT / "tests/arrays/outputs_only.rcs", ROOT / "tests/arrays/outputs_only.scn"))
     # Names that the naming schemes must keep apart (tests/test_naming.py).
     pairs.append((ROOT / "tests/naming/rcs_runtime.rcs", ROOT / "tests/naming/scenarios.scn"))
     # Every block of std.blocks; a controller type with two instances.

@@ -25,7 +25,7 @@ from rcsc.backends.c import LAUNCHER_FILES, RUNTIME_FILES as C_RUNTIME_FILES, CB
 from rcsc.backends.c.tables import main_tables
 from rcsc.outputs.backend import (
     BuildOptions, CtrlInfo, OutFile, RuleStep, StateTest, Target, base_cpu, built_controllers, calls_impure, cpu_ticks,
-    evaluated_first, expr_key, impure_functions, initial_value, keeps_gm_stamps, lower_controller, ordered_types, plan_layout, register, schedule_of,
+    expr_key, initial_value, keeps_gm_stamps, lower_controller, ordered_types, plan_layout, register, schedule_of,
     tests_state, types_with_arrays,
 )
 from rcsc.semantics.types import BOOL, DURATION, I32, I64, U32, ArrayType, EnumType, FloatType, IntType, RecordType, Type
@@ -79,51 +79,28 @@ class AdaBackend(Target):
         self.n = AdaNames(design.name, design_names(design))
         self.c = CBackend(design, self.options)
         self.infos = {name: lower_controller(c) for name, c in design.controllers.items()}
-        self.impure = impure_functions(design)
         self.info: CtrlInfo | None = None
         self.verb: str | None = None
         self.cse: dict[object, str] = {}
-        # Constants that make extern calls happen left to right (Ada leaves
-        # the order of operands, arguments and aggregate components to the
-        # compiler, and GNAT takes them right to left): operand -> its
-        # constant while the expression holding it is emitted.  The
-        # declare expressions that hold them are Ada 2022, so a design that
-        # needs one is compiled as Ada 2022 (`ada_version`), any other as Ada 2012.
-        self.seq_names: dict[int, str] = {}
-        self.seq_count = 0
+        # Whether a declare expression was emitted (`temporary`): they are
+        # Ada 2022, so a design that needs one is compiled as Ada 2022
+        # (`ada_version`), any other as Ada 2012.
         self.declares = False
 
     # ---- order of evaluation -------------------------------------------------------
 
-    def expr(self, e: m.Expr) -> str:
-        """As the base class, with the operands that `evaluated_first` names
-        in constants of a declare expression around it:
-        `pair(f(1), f(2))` is `(declare Rcs_Seq_1 : constant ... := F (1); begin Pair (Rcs_Seq_1, F (2)))`."""
-        name = self.seq_names.get(id(e))
-        if name is not None:
-            return name
-        first = evaluated_first(e, self.impure)
-        if not first:
-            return super().expr(e)
-        decls = self.sequence(first)
-        try:
-            body = _strip(super().expr(e))
-        finally:
-            for x in first:
-                del self.seq_names[id(x)]
-        return f"(declare {' '.join(decls)} begin {body})"
+    # Ada leaves the order of operands, arguments and aggregate components
+    # to the compiler, and GNAT takes arguments right to left: constants of
+    # a declare expression order the operands that call externs (`Target.expr`).
+    fixes_operand_order = True
 
-    def sequence(self, exprs: list[m.Expr]) -> list[str]:
-        """Declarations of constants holding `exprs`, in order; until the caller
-        drops them from `seq_names`, the expressions are emitted as their names."""
-        decls = []
-        for x in exprs:
-            self.seq_count += 1
-            temp = f"Rcs_Seq_{self.seq_count}"
-            decls.append(f"{temp} : constant {self.atype(x.type)} := {_strip(self.expr(x))};")
-            self.seq_names[id(x)] = temp
+    def temporary(self, e: m.Expr, n: int) -> tuple[str, str]:
         self.declares = True
-        return decls
+        name = f"Rcs_Seq_{n}"
+        return name, f"{name} : constant {self.atype(e.type)} := {_strip(self.expr(e))};"
+
+    def sequenced(self, parts: list[str], body: str) -> str:
+        return f"(declare {' '.join(parts)} begin {_strip(body)})"
 
     def ada_version(self) -> str:
         return "2022" if self.declares else "2012"
@@ -502,10 +479,9 @@ class AdaBackend(Target):
             # aggregate's components come in any order: those that call
             # externs are computed first, in the order of the parameters.
             first = [a for a in s.args if calls_impure(a, self.impure)][:-1]
-            decls = self.sequence(first)
+            decls = self.bind(first)
             vals = ", ".join(f"{self.n.member(p.name)} => {_strip(self.expr(a))}" for p, a in zip(verb.params, s.args))
-            for a in first:
-                del self.seq_names[id(a)]
+            self.unbind(first)
             store = f"{cmd}.Args := (Verb => {self.n.verb(s.sub, s.verb)}, {self.n.member(s.verb)} => ({vals}));"
             if decls:
                 out += [f"{pad}declare"] + [f"{pad}   {d}" for d in decls] + [f"{pad}begin", f"{pad}   {store}", f"{pad}end;"]
@@ -552,7 +528,7 @@ class AdaBackend(Target):
         init = [f"Loc.{n.member(x)} := {self.literal(initial_value(v), v.type)};" for x, v in c.locals.items()]
         for s in subs:
             init += [f"Sent.{s['member']} := 0;", f"Send.{s['member']} := False;"]
-        seq_before = self.seq_count
+        seq_before = self._temp_count
         plans = [self.plan(c, plan) for plan in c.plans.values()]
         self.verb = None
         pre, post = self.stmts(c.pre, 1), self.stmts(c.post, 1)
@@ -570,7 +546,7 @@ class AdaBackend(Target):
             # T'(A => X, B => G))`) and warns that X is not referenced: the
             # warning is turned off for those constants only, in the
             # controllers that have some.
-            "sequenced": self.seq_count > seq_before,
+            "sequenced": self._temp_count > seq_before,
         }
         # The step always reads Cycle (the entry cycle of a new command and the
         # status stamp), so it needs no `pragma Unreferenced (Cycle)`.

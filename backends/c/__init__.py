@@ -206,9 +206,9 @@ class CBackend(CTarget):
             init += [f"self->sent.{s['member']} = 0u;", f"self->send.{s['member']} = false;"]
         plans = [self.plan(c, plan) for plan in c.plans.values()]
         self.verb = None
-        self.take_temporaries()
+        self.take_temporaries([])
         pre, post = self.stmts(c.pre, 1), self.stmts(c.post, 1)
-        pre = ["    " + d for d in self.take_temporaries()] + pre
+        pre = ["    " + d for d in self.take_temporaries(pre + post)] + pre
         ctx = {
             "name": c_comment(c.name), "doc": c_comment(c.doc), "stem": n.ctrl_stem(c.name), "type": self.ctrl_type(c.name),
             "init_fn": n.ctrl_part(c.name, "init"), "step_fn": n.ctrl_part(c.name, "step"),
@@ -231,7 +231,7 @@ class CBackend(CTarget):
     def plan(self, c: m.Controller, plan: m.Plan) -> dict:
         self.verb = plan.verb
         layout = plan_layout(plan, self.impure)
-        self.take_temporaries()
+        self.take_temporaries([])
         body = self.layout(layout)
         return {
             "fn": self.n.plan_fn(plan.verb),
@@ -240,7 +240,7 @@ class CBackend(CTarget):
             "where": self.where_text(plan.span),
             "continuous": plan.continuous,
             "needs_state": tests_state(layout),
-            "body": self.take_temporaries() + body,
+            "body": self.take_temporaries(body) + body,
         }
 
     def layout(self, items: list) -> list[str]:

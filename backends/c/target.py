@@ -15,8 +15,7 @@ import re
 
 from rcsc.semantics import model as m
 from rcsc.backends.c.naming import CNames
-from rcsc.outputs.backend import (BuildOptions, CtrlInfo, Target, base_cpu, cpu_ticks, evaluated_first, expr_key, impure_functions,
-                                  lower_controller)
+from rcsc.outputs.backend import BuildOptions, CtrlInfo, Target, base_cpu, cpu_ticks, expr_key, lower_controller
 from rcsc.semantics.types import BOOL, DURATION, I64, U32, ArrayType, EnumType, FloatType, IntType, RecordType, Type
 
 # Suffix of the rcs_num.h helper for each integer type.
@@ -77,46 +76,34 @@ class CTarget(Target):
         self.infos = {name: lower_controller(c) for name, c in design.controllers.items()}
         # Pure calls computed once for the conditions being emitted: expr_key -> local name.
         self.cse: dict[object, str] = {}
-        self.impure = impure_functions(design)
-        # Temporaries that make extern calls happen left to right (C leaves
-        # the order of operands and arguments to the compiler, and gcc takes
-        # them right to left): operand -> its temporary while the expression
-        # holding it is emitted, and the declarations of the function being
-        # emitted (`take_temporaries`).
-        self.seq_names: dict[int, str] = {}
+        # The declarations of the temporaries that order extern calls
+        # (`temporary`), for the top of the function being emitted.
         self.seq_decls: list[str] = []
-        self.seq_count = 0
 
     # ---- order of evaluation -----------------------------------------------------
 
-    def expr(self, e: m.Expr) -> str:
-        """As the base class, with the operands that `evaluated_first` names put
-        in temporaries first by the comma operator, which orders them:
-        `pair(f(1), f(2))` is `(rcs_seq_1 = f(1), pair(rcs_seq_1, f(2)))`."""
-        name = self.seq_names.get(id(e))
-        if name is not None:
-            return name
-        first = evaluated_first(e, self.impure)
-        if not first:
-            return super().expr(e)
-        pre = []
-        for x in first:
-            self.seq_count += 1
-            temp = f"rcs_seq_{self.seq_count}"
-            self.seq_decls.append(f"{self.ctype(x.type)} {temp};")
-            pre.append(f"{temp} = {self.expr(x)}")
-            self.seq_names[id(x)] = temp
-        try:
-            body = super().expr(e)
-        finally:
-            for x in first:
-                del self.seq_names[id(x)]
-        return f"({', '.join(pre)}, {body})"
+    # C leaves the order of operands and arguments to the compiler, and gcc
+    # takes arguments right to left: the comma operator orders the operands
+    # that call externs (`Target.expr`).
+    fixes_operand_order = True
 
-    def take_temporaries(self) -> list[str]:
-        """The declarations of the temporaries made since the last call (for the top of a function)."""
+    def temporary(self, e: m.Expr, n: int) -> tuple[str, str]:
+        name = f"rcs_seq_{n}"
+        self.seq_decls.append(f"{self.ctype(e.type)} {name};")
+        return name, f"{name} = {self.expr(e)}"
+
+    def sequenced(self, parts: list[str], body: str) -> str:
+        return f"({', '.join(parts)}, {body})"
+
+    def take_temporaries(self, lines: list[str]) -> list[str]:
+        """The declarations of the temporaries made since the last call that
+        `lines` use (for the top of their function).  An expression emitted
+        twice, once to be thrown away (`binary_expr`'s opaque constants, the
+        argument of `sum`), made temporaries nobody reads: C would warn of
+        them."""
         decls, self.seq_decls = self.seq_decls, []
-        return decls
+        used = set(re.findall(r"\brcs_seq_\d+\b", "\n".join(lines)))
+        return [d for d in decls if d.rsplit(" ", 1)[1].rstrip(";") in used]
 
     # ---- names and types ---------------------------------------------------------
 

@@ -274,7 +274,7 @@ def main_program(tg: RustTarget, cpu: m.Cpu, schedule: list[m.Controller], ctrls
     main_body += tail(Call("std::process::exit", [Call("host::run", [Unary("&mut ", Atom("main"))])]), 1)
     # The descriptor constructors the tables use, and the imports of what the
     # generated text uses (the template's own text uses the first four).
-    text = "\n".join(x for group in (statics, views, [command], methods) for lines in group for x in lines)
+    text = "\n".join(x for group in (statics, views, [command], methods, list(mp.helpers.values())) for lines in group for x in lines)
     ctors = []
     for fn, ty, params, fields in (
         ("field_desc", "FieldDesc", "name: &'static str, ty: &'static TypeDesc", "name, ty"),

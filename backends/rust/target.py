@@ -25,7 +25,7 @@ import re
 
 from rcsc.semantics import model as m
 from rcsc.backends.rust.naming import RustNames
-from rcsc.outputs.backend import BuildOptions, CtrlInfo, Target, base_cpu, cpu_ticks, expr_key, impure_functions, initial_value, lower_controller
+from rcsc.outputs.backend import BuildOptions, CtrlInfo, Target, base_cpu, cpu_ticks, expr_key, initial_value, lower_controller
 from rcsc.backends.rust.fmt import (
     P_POSTFIX,
     P_UNARY,
@@ -104,7 +104,6 @@ class RustTarget(Target):
         self.uses: set[str] = set()
         # Pure calls computed once for the conditions being emitted: expr_key -> local name.
         self.cse: dict[object, str] = {}
-        self.impure = impure_functions(design)
 
     def begin(self) -> None:
         self.uses = set()

@@ -495,11 +495,22 @@ class Target:
     # The transports (BuildOptions.transport) this target can generate.
     transports: tuple[str, ...] = ("shm",)
     MAX_CPUS = 64  # the transport keeps one bit per reading CPU in a 64-bit word
+    # The language leaves the order of operands and arguments to its compiler
+    # (C, Ada): `expr` then computes the operands that may call an extern
+    # into temporaries first, through the hooks `temporary` and `sequenced`.
+    fixes_operand_order = False
 
     def __init__(self, design: m.Design, options: BuildOptions | None = None) -> None:
         self.design = design
         self.options = options or BuildOptions()
         self._jinja: jinja2.Environment | None = None
+        # Functions that may call an extern: never moved, merged or reordered.
+        self.impure = impure_functions(design)
+        # Operands held in temporaries while the expression around them is
+        # emitted (id of the node -> the temporary's name), and a counter
+        # that names them.
+        self._temps: dict[int, str] = {}
+        self._temp_count = 0
 
     # ---- refusals ------------------------------------------------------------------
 
@@ -605,7 +616,50 @@ class Target:
         """The target's form of an expression: `<node>_expr` of the node's class.
 
         C returns text; a target may return a layout tree whose str() is the
-        text (Rust does, to break long lines the way rustfmt does)."""
+        text (Rust does, to break long lines the way rustfmt does).
+
+        In a target that `fixes_operand_order`, the operands of `e` that
+        `evaluated_first` names are bound to temporaries first, in order, and
+        `e` is emitted reading them: `pair(f(1), f(2))` is C's
+        `(rcs_seq_1 = f(1), pair(rcs_seq_1, f(2)))`."""
+        name = self._temps.get(id(e))
+        if name is not None:
+            return name
+        first = evaluated_first(e, self.impure) if self.fixes_operand_order else []
+        if not first:
+            return self.node_expr(e)
+        parts = self.bind(first)
+        try:
+            body = self.node_expr(e)
+        finally:
+            self.unbind(first)
+        return self.sequenced(parts, body)
+
+    def bind(self, exprs: list[m.Expr]) -> list[str]:
+        """The bindings of `exprs` to new temporaries, in order (`temporary`);
+        until `unbind`, each is emitted as its temporary's name."""
+        parts = []
+        for x in exprs:
+            self._temp_count += 1
+            name, part = self.temporary(x, self._temp_count)
+            parts.append(part)
+            self._temps[id(x)] = name
+        return parts
+
+    def unbind(self, exprs: list[m.Expr]) -> None:
+        for x in exprs:
+            del self._temps[id(x)]
+
+    def temporary(self, e: m.Expr, n: int) -> tuple[str, str]:
+        """The name of the n-th temporary and the text that binds `e` to it (targets that `fixes_operand_order`)."""
+        raise NotImplementedError(f"{self.name}: temporaries")
+
+    def sequenced(self, parts: list[str], body: str) -> str:
+        """An expression that evaluates the bindings `parts` in order, then `body`."""
+        raise NotImplementedError(f"{self.name}: sequenced")
+
+    def node_expr(self, e: m.Expr) -> str:
+        """`<node>_expr` of the node's class."""
         method = getattr(self, f"{type(e).__name__.lower()}_expr", None)
         if method is None:
             raise NotImplementedError(f"{self.name}: no {type(e).__name__.lower()}_expr")
