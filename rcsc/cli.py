@@ -476,7 +476,7 @@ def _run_sim(args: argparse.Namespace) -> int:
     steps: list[str] | None = [] if args.step_log else None
     try:
         run = run_scenario(design, sc, externs=externs, step_log=steps)
-    except sim_externs.ExternFailed as exc:
+    except sim_externs.ExternCallError as exc:
         diags = Diagnostics()
         exc.report(diags)
         _report_to_stderr(diags)
@@ -629,6 +629,8 @@ def _run_test(args: argparse.Namespace) -> int:
             unit = "ticks" if outcome.result is not None and outcome.result.multi_cpu else "cycles"
             extra = f" ({outcome.cycles} {unit}, {outcome.seconds:.2f} s)" if outcome.cycles else ""
             _write(sys.stdout, render.escape_controls(f"{word} {scn}{extra}") + "\n")
+            if outcome.notes is not None:
+                _write(sys.stdout, render.escape_controls(render.render_short(outcome.notes)))
             if not outcome.passed:
                 if outcome.message:
                     _write(sys.stdout, render.escape_controls("".join(f"    {line}\n" for line in outcome.message.splitlines())))

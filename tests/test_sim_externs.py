@@ -185,3 +185,83 @@ def test_results_must_be_of_the_extern_type() -> None:
     assert conform((1, 2), arr) == [1, 2]
     with pytest.raises(TypeError):
         conform([1, 2, 3], arr)
+
+
+def test_the_file_runs_afresh_for_each_cpu_and_run(folder: Path) -> None:
+    """State at module level is per CPU and per run, as each CPU's program
+    starts afresh: two scenarios of `rcsc test` see the same first values."""
+    (folder / "ext.py").write_text("import math\n\nCALLS = [0]\n\ndef count():\n    CALLS[0] += 1\n    return CALLS[0]\n\n"
+                                   "def path_length(dx, dy):\n    return math.hypot(dx, dy)\n", encoding="utf-8")
+    for name in ("a", "b"):
+        (folder / f"{name}.scn").write_text('scenario "n"\ncycles 2\nexpect at 2: n == 2\n', encoding="utf-8")
+    rc, out, _ = _run(["test", str(folder / "kin.rcs"), str(folder / "a.scn"), str(folder / "b.scn"), "--externs", str(folder / "ext.py")])
+    assert "3 passed, 0 failed" in out, out
+    # The missing stand-ins are said once, even though both scenarios pass.
+    assert out.count("W0830") == 2 and "gear_of" in out and "mid" in out, out
+
+
+def test_the_file_imports_like_a_script(folder: Path) -> None:
+    """Modules beside the file import; dataclasses work (the module is registered)."""
+    (folder / "helper.py").write_text("def hyp(a, b):\n    return (a * a + b * b) ** 0.5\n", encoding="utf-8")
+    text = ("from __future__ import annotations\nfrom dataclasses import dataclass\nfrom helper import hyp\n\n"
+            "@dataclass\nclass P:\n    x: float\n\ndef path_length(dx, dy):\n    return hyp(P(dx).x, dy)\n")
+    rc, lines, err = _sim(folder, text)
+    assert lines and lines[0]["gm"]["len"] == 5.0, err
+    # A syntax error in an imported module is reported in that module.
+    (folder / "broken.py").write_text("def f(:\n    pass\n", encoding="utf-8")
+    rc, lines, err = _sim(folder, "import broken\n")
+    assert rc == 1 and "error[E0830]" in err and f"{folder / 'broken.py'}:1:" in err, err
+
+
+def test_a_result_too_large_for_f64_is_e0831(folder: Path) -> None:
+    rc, lines, err = _sim(folder, "def path_length(dx, dy):\n    return 10 ** 400\n")
+    assert rc == 1 and "error[E0831]" in err and "too large for `f64`" in err
+
+
+def test_named_arguments_and_block_inputs_are_evaluated_in_parameter_order(tmp_path: Path) -> None:
+    """docs/language.md, "Order of evaluation": whatever order names them."""
+    design = """design order
+
+record Pt { a: i32, b: i32 }
+
+extern fn t(k: i32) -> i32 budget 1 us
+
+block PAIR() {
+    input a: i32 = 0
+    input b: i32 = 0
+    output y: i32 = 0
+    step { y = a - b; }
+}
+
+gm q: Pt = Pt(a = 0, b = 0) to env
+gm r: i32 = 0 to env
+
+controller K level 1 budget 1 ms {
+    writes q, r
+    block blk: PAIR()
+    pre {
+        q = Pt(b = t(1), a = t(2));
+        blk(b = t(3), a = t(4));
+        r = blk.y;
+    }
+}
+
+cpu MAIN {
+    heartbeat 10 ms
+    schedule K
+}
+"""
+    (tmp_path / "order.rcs").write_text(design, encoding="utf-8")
+    (tmp_path / "order.scn").write_text('scenario "o"\ncycles 1\n', encoding="utf-8")
+    (tmp_path / "ext.py").write_text("import json, os\n\ndef t(k):\n    with open(os.environ['ORDER_LOG'], 'a') as f:\n"
+                                     "        f.write(str(k) + '\\n')\n    return k\n", encoding="utf-8")
+    import os
+
+    os.environ["ORDER_LOG"] = str(tmp_path / "log.txt")
+    try:
+        rc, out, err = _run(["sim", str(tmp_path / "order.rcs"), "--scenario", str(tmp_path / "order.scn"), "--externs", str(tmp_path / "ext.py")])
+    finally:
+        del os.environ["ORDER_LOG"]
+    assert rc == 0, err
+    assert (tmp_path / "log.txt").read_text().split() == ["2", "1", "4", "3"]
+    assert json.loads(out.splitlines()[0])["gm"]["r"] == 1

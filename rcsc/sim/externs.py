@@ -9,9 +9,11 @@ lookup table) can be simulated with a Python file that stands in for them:
   (an `int` for the integer types and `duration`, in nanoseconds; a `float`;
   a `bool`; an enum member's name as a `str`; a record as a `dict` of its
   fields; an array as a `list`), or
-* a function `externs()` returning a `dict` of them by name, called once per
-  CPU: each CPU's Main Program has its own externs, so an extern that keeps
-  state (a counter, a filter) keeps it per CPU.
+* a function `externs()` returning a `dict` of them by name.
+
+The file runs afresh for each CPU of each run: each CPU's Main Program has
+its own externs and starts afresh, so an extern that keeps state (a counter,
+a filter), at module level or in `externs()`, keeps it per CPU and per run.
 
 The file is loaded as a Python module (it is your code: it runs with your
 rights).  What goes wrong is a finding, never a traceback: the file cannot be
@@ -24,6 +26,8 @@ it would not be the design's).
 from __future__ import annotations
 
 import difflib
+import os
+import sys
 import traceback
 import types
 from collections.abc import Callable
@@ -53,9 +57,34 @@ class ExternFailed(ExternCallError):
         d.with_help("fix the Python function, or run without --externs (the extern then returns zero values)")
 
 
+class ExternsFileFailed(ExternCallError):
+    """The externs file failed when it was run again for another CPU or run (E0830)."""
+
+    def __init__(self, path: str, message: str, where: str) -> None:
+        super().__init__(message)
+        self.path, self.message, self.where = path, message, where
+
+    def report(self, diags: Diagnostics) -> None:
+        d = diags.add("E0830", None, f"the externs file {self.path} failed when it ran again: {self.message}")
+        if self.where:
+            d.with_note(self.where)
+
+
+class _NotADict(Exception):
+    pass
+
+
+_modules = 0
+
+
 def load(path: str, design: m.Design, diags: Diagnostics) -> Callable[[], dict] | None:
     """The externs of `path` for `design` as a function making one set per CPU
-    (`rcsc.sim.runner.run_scenario`); None after E0830."""
+    (`rcsc.sim.runner.run_scenario`); None after E0830.
+
+    The file runs afresh for each CPU of each run, as each CPU's program
+    starts afresh: state at module level is per CPU and per run too.  It
+    runs once here, to report what is wrong before anything is simulated;
+    that first instance serves the first CPU."""
     try:
         with open(path, "rb") as f:
             raw = f.read()
@@ -63,46 +92,60 @@ def load(path: str, design: m.Design, diags: Diagnostics) -> Callable[[], dict] 
     except (OSError, UnicodeDecodeError) as exc:
         diags.add("E0830", None, f"cannot read the externs file {path}: {getattr(exc, 'strerror', None) or exc}")
         return None
-    source = SourceFile(path, text)
-    module = types.ModuleType("rcsc_sim_externs")
-    module.__file__ = path
+    # Modules beside the file import as they would with `python FILE.py`.
+    folder = os.path.dirname(os.path.abspath(path))
+    if folder not in sys.path:
+        sys.path.insert(0, folder)
     try:
         code = compile(text, path, "exec")
-        exec(code, module.__dict__)  # noqa: S102 - the user's own file, named on the command line
-    except SyntaxError as exc:
-        d = diags.add("E0830", _line_span(source, exc.lineno or 1, exc.offset), f"the externs file does not load: {exc.msg}", "here")
-        d.with_help(f"the file is Python: fix it, and check it with `python {path}`")
+        impl, factory = _instantiate(code, path)
+    except _NotADict as exc:
+        diags.add("E0830", None, f"`externs()` in {path} returned a {exc}, not a dict of functions by name")
         return None
     except Exception as exc:  # the user's code may raise anything while it loads
-        line = _line_in(exc, path)
-        d = diags.add("E0830", _line_span(source, line or 1, None), f"the externs file does not load: it raised {_describe(exc)}", "raised here")
+        file, line, col = _location(exc, path)
+        d = diags.add("E0830", _span_in(file, text if file == path else None, line, col),
+                      f"the externs file does not load: {exc.msg if isinstance(exc, SyntaxError) else 'it raised ' + _describe(exc)}",
+                      "here" if isinstance(exc, SyntaxError) else "raised here")
         d.with_help(f"the file is Python: fix it, and check it with `python {path}`")
         return None
-
     externs = [f for f in design.functions.values() if f.extern]
+    _check_names(impl, externs, path, diags, from_dict=factory)
+    made = [impl]
+
+    def make() -> dict:
+        if made:
+            return _wrap(made.pop(), externs, path)
+        try:
+            again, _ = _instantiate(code, path)
+        except _NotADict as exc:
+            raise ExternsFileFailed(path, f"`externs()` returned a {exc}, not a dict", "") from None
+        except Exception as exc:
+            raise ExternsFileFailed(path, f"it raised {_describe(exc)}", _where(exc)) from None
+        return _wrap(again, externs, path)
+
+    return make
+
+
+def _instantiate(code, path: str) -> tuple[dict, bool]:
+    """Run the file's code in a new module: its functions by name (or what
+    its `externs()` returns), and whether they came from `externs()`."""
+    global _modules
+    _modules += 1
+    name = f"rcsc_sim_externs_{_modules}"
+    module = types.ModuleType(name)
+    module.__file__ = path
+    # Registered, as an imported module is: `dataclasses` and `typing` look
+    # their module up by name.
+    sys.modules[name] = module
+    exec(code, module.__dict__)  # noqa: S102 - the user's own file, named on the command line
     factory = module.__dict__.get("externs")
     if callable(factory):
-        try:
-            first = factory()
-        except Exception as exc:
-            diags.add("E0830", _line_span(source, _line_in(exc, path) or 1, None),
-                      f"`externs()` raised {_describe(exc)}", "raised here")
-            return None
-        if not isinstance(first, dict):
-            diags.add("E0830", None, f"`externs()` in {path} returned a {type(first).__name__}, not a dict of functions by name")
-            return None
-        _check_names(first, externs, path, diags, from_dict=True)
-        made = [first]
-
-        def make() -> dict:
-            # The set made to check the names serves the first CPU.
-            impl = made.pop() if made else factory()
-            return _wrap(impl if isinstance(impl, dict) else {}, externs, path)
-
-        return make
-    found = {f.name: module.__dict__[f.name] for f in externs if callable(module.__dict__.get(f.name))}
-    _check_names(module.__dict__, externs, path, diags, from_dict=False)
-    return lambda: _wrap(found, externs, path)
+        impl = factory()
+        if not isinstance(impl, dict):
+            raise _NotADict(type(impl).__name__)
+        return impl, True
+    return {k: v for k, v in module.__dict__.items() if callable(v)}, False
 
 
 def _check_names(impl: dict, externs: list[m.Function], path: str, diags: Diagnostics, from_dict: bool) -> None:
@@ -136,10 +179,10 @@ def _checked_call(f: m.Function, fn: Callable, path: str) -> Callable:
         try:
             value = fn(*(clone(a) for a in args))
         except Exception as exc:
-            raise ExternFailed(f, f"it raised {_describe(exc)}", _where(exc, path)) from None
+            raise ExternFailed(f, f"it raised {_describe(exc)}", _where(exc)) from None
         try:
             return conform(value, f.ret)
-        except TypeError as exc:
+        except (TypeError, ValueError, OverflowError) as exc:
             raise ExternFailed(f, f"it returned {_short(value)}, {exc}", "") from None
 
     return call
@@ -160,7 +203,10 @@ def conform(value, t: Type):
         raise TypeError(f"not an integer (`{t}`)")
     if isinstance(t, FloatType):
         if isinstance(value, (int, float)) and not isinstance(value, bool):
-            return float(value)
+            try:
+                return float(value)
+            except OverflowError:
+                raise TypeError("too large for `f64`") from None
         raise TypeError("not a number (`f64`)")
     if isinstance(t, EnumType):
         if isinstance(value, str) and value in t.members:
@@ -196,18 +242,34 @@ def _short(value) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def _line_in(exc: BaseException, path: str) -> int | None:
-    """The line of the externs file where `exc` was raised (its innermost frame there)."""
-    line = None
-    for frame in traceback.extract_tb(exc.__traceback__):
-        if frame.filename == path:
-            line = frame.lineno
-    return line
+def _location(exc: BaseException, path: str) -> tuple[str, int, int | None]:
+    """Where `exc` comes from: a syntax error's own place (maybe in a module
+    the file imports), else the innermost frame in the externs file, else
+    the innermost frame."""
+    if isinstance(exc, SyntaxError) and exc.filename:
+        return exc.filename, exc.lineno or 1, exc.offset
+    frames = traceback.extract_tb(exc.__traceback__)
+    mine = [fr for fr in frames if fr.filename == path]
+    frame = mine[-1] if mine else (frames[-1] if frames else None)
+    if frame is None:
+        return path, 1, None
+    return frame.filename, frame.lineno or 1, None
 
 
-def _where(exc: BaseException, path: str) -> str:
-    line = _line_in(exc, path)
-    return f"raised at {path}:{line}" if line else ""
+def _where(exc: BaseException) -> str:
+    frames = traceback.extract_tb(exc.__traceback__)
+    return f"raised at {frames[-1].filename}:{frames[-1].lineno}" if frames else ""
+
+
+def _span_in(file: str, text: str | None, line: int, col: int | None) -> Span | None:
+    """A span in `file` (read unless `text` is given), or None if it cannot be read."""
+    if text is None:
+        try:
+            with open(file, encoding="utf-8") as f:
+                text = f.read()
+        except (OSError, UnicodeDecodeError):
+            return None
+    return _line_span(SourceFile(file, text), line, col)
 
 
 def _line_span(source: SourceFile, line: int, col: int | None) -> Span:

@@ -91,6 +91,9 @@ class Outcome:
     message: str = ""  # failure report (several lines) or error text
     diags: Diagnostics | None = None
     result: RunResult | None = None
+    # Warnings to show even when the scenario passes (the externs file's
+    # W0830), on the first scenario of the design only.
+    notes: Diagnostics | None = None
 
 
 @dataclass
@@ -146,6 +149,7 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict, target: st
     sc = text_to_scenario(SourceFile(scenario_path, text), checked.model, diags)
     if sc is None:
         return Outcome(design_path, scenario_path, False, 0.0, message="the scenario has errors", diags=diags)
+    notes = None
     if target == "sim":
         from rcsc.sim import externs as sim_externs
 
@@ -156,9 +160,12 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict, target: st
         made, loading = design_cache.get(key, (None, None))
         if loading is not None and loading.has_errors():
             return Outcome(design_path, scenario_path, False, 0.0, message="the externs file does not load", diags=loading)
+        if loading is not None and loading.items and not design_cache.get(("externs shown", design_path)):
+            design_cache[("externs shown", design_path)] = True
+            notes = loading
         try:
             result = run_scenario(checked.model, sc, externs=made)
-        except sim_externs.ExternFailed as exc:
+        except sim_externs.ExternCallError as exc:
             failed = Diagnostics()
             exc.report(failed)
             return Outcome(design_path, scenario_path, False, time.perf_counter() - start, message="an extern failed", diags=failed)
@@ -179,7 +186,8 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict, target: st
             design_cache.setdefault(key, exc)
             return Outcome(design_path, scenario_path, False, time.perf_counter() - start, message=f"{target}: {exc}")
     seconds = time.perf_counter() - start
-    return Outcome(design_path, scenario_path, result.passed, seconds, sc.cycles, "" if result.passed else failure_text(result), result=result)
+    return Outcome(design_path, scenario_path, result.passed, seconds, sc.cycles, "" if result.passed else failure_text(result), result=result,
+                   notes=notes)
 
 
 def _xml_safe(text: str) -> str:
