@@ -460,6 +460,7 @@ class _UseCopier(_Copier):
     def call(self, inst: _Inst, st: ast.CallStmt) -> list[ast.Stmt]:
         inputs = [mb for mb in inst.t.members if mb.kind == "input"]
         out: list[ast.Stmt] = []
+        ranks: list[int] = []
         seen: set[str] = set()
         for i, a in enumerate(st.call.args):
             if a.name is None:
@@ -482,6 +483,11 @@ class _UseCopier(_Copier):
             assign = ast.Assign(a.span, [target], "=", self.copy(a.value))
             assign.depth = getattr(a.value, "depth", 1) + 1
             out.append(assign)
+            ranks.append(inputs.index(mb))
+        # Inputs are evaluated in the order of the block's inputs, as the
+        # arguments of any call are in the order of its parameters
+        # (docs/language.md, "Order of evaluation"), whatever order names them.
+        out = [x for _, x in sorted(zip(ranks, out), key=lambda pair: pair[0])]
         cp = _StepCopier(inst, Diagnostics())  # the step's own findings were reported once, at the instance
         for _, body in inst.t.steps[:1]:
             out.extend(cp.copy(s) for s in body if isinstance(s, ast.Assign) and _assignable(inst, s))
