@@ -229,6 +229,15 @@ class _ObserverChecker(Checker):
             return m.Const(node.span, ERROR, False)
         return Observed(node.span, BOOL, ctrl.name, attr, sym)
 
+    def e_Call(self, node: ast.Call, expected: Type | None) -> m.Expr:
+        fn = self.g.functions.get(getattr(node.func, "name", ""))
+        if fn is not None and fn.extern:
+            self.d.add("E0211", node.func.span, f"extern function `{fn.name}` cannot be called in an expectation", "extern call").with_note(
+                "an expectation observes the run, after the cycle, on what the trace shows: it calls none of the design's code"
+            )
+            return m.Const(node.span, ERROR, False)
+        return super().e_Call(node, expected)
+
     def e_Attr(self, node: ast.Attr, expected: Type | None) -> m.Expr:
         if isinstance(node.obj, ast.Name) and node.obj.name in self.design.controllers and node.obj.name not in self.design.gm:
             ctrl = self.design.controllers[node.obj.name]
