@@ -265,3 +265,11 @@ cpu MAIN {
     assert rc == 0, err
     assert (tmp_path / "log.txt").read_text().split() == ["2", "1", "4", "3"]
     assert json.loads(out.splitlines()[0])["gm"]["r"] == 1
+
+
+def test_an_exit_in_the_file_is_a_finding_not_the_end_of_rcsc(folder: Path) -> None:
+    """`sys.exit()` raises SystemExit: in a stand-in it is a failed call, not rcsc's own exit code."""
+    rc, lines, err = _sim(folder, "import sys\n\ndef count():\n    sys.exit(3)\n")
+    assert rc == 1 and "error[E0831]: extern `count` failed in the simulator: it raised SystemExit: 3" in err
+    rc, lines, err = _sim(folder, "import sys\nsys.exit(5)\n")
+    assert rc == 1 and "error[E0830]: the externs file does not load: it raised SystemExit: 5" in err

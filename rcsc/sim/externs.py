@@ -102,7 +102,7 @@ def load(path: str, design: m.Design, diags: Diagnostics) -> Callable[[], dict] 
     except _NotADict as exc:
         diags.add("E0830", None, f"`externs()` in {path} returned a {exc}, not a dict of functions by name")
         return None
-    except Exception as exc:  # the user's code may raise anything while it loads
+    except (Exception, SystemExit) as exc:  # the user's code may raise anything while it loads (even exit)
         file, line, col = _location(exc, path)
         d = diags.add("E0830", _span_in(file, text if file == path else None, line, col),
                       f"the externs file does not load: {exc.msg if isinstance(exc, SyntaxError) else 'it raised ' + _describe(exc)}",
@@ -120,7 +120,7 @@ def load(path: str, design: m.Design, diags: Diagnostics) -> Callable[[], dict] 
             again, _ = _instantiate(code, path)
         except _NotADict as exc:
             raise ExternsFileFailed(path, f"`externs()` returned a {exc}, not a dict", "") from None
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:
             raise ExternsFileFailed(path, f"it raised {_describe(exc)}", _where(exc)) from None
         return _wrap(again, externs, path)
 
@@ -178,7 +178,7 @@ def _checked_call(f: m.Function, fn: Callable, path: str) -> Callable:
     def call(*args):
         try:
             value = fn(*(clone(a) for a in args))
-        except Exception as exc:
+        except (Exception, SystemExit) as exc:
             raise ExternFailed(f, f"it raised {_describe(exc)}", _where(exc)) from None
         try:
             return conform(value, f.ret)
