@@ -228,9 +228,7 @@ def _error_span(source: SourceFile, message: str) -> Span:
     if not mt or mt.group(1) is None:
         end = len(source.text) if "end of document" in message else 0
         return Span(source, end, end)
-    line, col = int(mt.group(1)), int(mt.group(2))
-    start = source._line_starts[min(line, source.line_count) - 1] + col - 1
-    start = min(start, len(source.text))
+    start = source.offset(int(mt.group(1)), int(mt.group(2)))
     return Span(source, start, min(start + 1, len(source.text)))
 
 

@@ -82,10 +82,6 @@ class AdaBackend(Target):
         self.info: CtrlInfo | None = None
         self.verb: str | None = None
         self.cse: dict[object, str] = {}
-        # Whether a declare expression was emitted (`temporary`): they are
-        # Ada 2022, so a design that needs one is compiled as Ada 2022
-        # (`ada_version`), any other as Ada 2012.
-        self.declares = False
 
     # ---- order of evaluation -------------------------------------------------------
 
@@ -95,7 +91,6 @@ class AdaBackend(Target):
     fixes_operand_order = True
 
     def temporary(self, e: m.Expr, n: int) -> tuple[str, str]:
-        self.declares = True
         name = f"Rcs_Seq_{n}"
         return name, f"{name} : constant {self.atype(e.type)} := {_strip(self.expr(e))};"
 
@@ -103,7 +98,9 @@ class AdaBackend(Target):
         return f"(declare {' '.join(parts)} begin {_strip(body)})"
 
     def ada_version(self) -> str:
-        return "2022" if self.declares else "2012"
+        """Ada 2022 for a design with a declare expression (a temporary was
+        made: `temporary`), else Ada 2012."""
+        return "2022" if self._temp_count else "2012"
 
     # ---- files ---------------------------------------------------------------------
 

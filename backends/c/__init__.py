@@ -206,7 +206,7 @@ class CBackend(CTarget):
             init += [f"self->sent.{s['member']} = 0u;", f"self->send.{s['member']} = false;"]
         plans = [self.plan(c, plan) for plan in c.plans.values()]
         self.verb = None
-        self.take_temporaries([])
+        self.seq_decls.clear()
         pre, post = self.stmts(c.pre, 1), self.stmts(c.post, 1)
         pre = ["    " + d for d in self.take_temporaries(pre + post)] + pre
         ctx = {
@@ -231,7 +231,7 @@ class CBackend(CTarget):
     def plan(self, c: m.Controller, plan: m.Plan) -> dict:
         self.verb = plan.verb
         layout = plan_layout(plan, self.impure)
-        self.take_temporaries([])
+        self.seq_decls.clear()
         body = self.layout(layout)
         return {
             "fn": self.n.plan_fn(plan.verb),

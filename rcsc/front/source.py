@@ -195,6 +195,13 @@ class SourceFile:
     def line_count(self) -> int:
         return len(self._line_starts)
 
+    def offset(self, line: int, col: int = 1) -> int:
+        """The character offset of 1-based (line, column), clamped into the
+        file: for positions other tools report (TOML, Python)."""
+        starts = self._line_starts
+        start = starts[max(1, min(line, len(starts))) - 1]
+        return min(start + max(col, 1) - 1, len(self.text))
+
 
 class Span:
     """A half-open character range [start, end) of a source file.

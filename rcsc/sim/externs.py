@@ -34,6 +34,7 @@ from collections.abc import Callable
 
 from rcsc.diagnostics import Diagnostics
 from rcsc.front.source import SourceFile, Span
+from rcsc.outputs import safeio
 from rcsc.semantics import model as m
 from rcsc.semantics.types import BOOL, DURATION, ArrayType, EnumType, FloatType, IntType, RecordType, Type
 from rcsc.sim.simulate import ExternCallError, clone
@@ -86,9 +87,7 @@ def load(path: str, design: m.Design, diags: Diagnostics) -> Callable[[], dict] 
     runs once here, to report what is wrong before anything is simulated;
     that first instance serves the first CPU."""
     try:
-        with open(path, "rb") as f:
-            raw = f.read()
-        text = raw.decode("utf-8")
+        text = safeio.read_input(path).decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         diags.add("E0830", None, f"cannot read the externs file {path}: {getattr(exc, 'strerror', None) or exc}")
         return None
@@ -265,22 +264,16 @@ def _span_in(file: str, text: str | None, line: int, col: int | None) -> Span | 
     """A span in `file` (read unless `text` is given), or None if it cannot be read."""
     if text is None:
         try:
-            with open(file, encoding="utf-8") as f:
-                text = f.read()
+            text = safeio.read_input(file).decode("utf-8")
         except (OSError, UnicodeDecodeError):
             return None
     return _line_span(SourceFile(file, text), line, col)
 
 
 def _line_span(source: SourceFile, line: int, col: int | None) -> Span:
-    """A span of one character at (line, col), or of the line's first non-blank character."""
-    lines = source.text.splitlines(keepends=True)
-    line = max(1, min(line, len(lines) or 1))
-    start = sum(len(x) for x in lines[: line - 1])
-    text = lines[line - 1] if lines else ""
-    if col is not None and col >= 1:
-        offset = min(col - 1, max(len(text.rstrip("\r\n")) - 1, 0))
-    else:
-        offset = len(text) - len(text.lstrip())
-    at = min(start + offset, len(source.text))
+    """A span of one character at (line, col), or at the line's first non-blank character."""
+    if col is None or col < 1:
+        text = source.line_text(max(1, min(line, source.line_count)))
+        col = len(text) - len(text.lstrip()) + 1
+    at = source.offset(line, col)
     return Span(source, at, min(at + 1, len(source.text)))
