@@ -114,14 +114,14 @@ def load(path: str, design: m.Design, diags: Diagnostics) -> Callable[[], dict] 
 
     def make() -> dict:
         if made:
-            return _wrap(made.pop(), externs, path)
+            return _wrap(made.pop(), externs)
         try:
             again, _ = _instantiate(code, path)
         except _NotADict as exc:
             raise ExternsFileFailed(path, f"`externs()` returned a {exc}, not a dict", "") from None
         except (Exception, SystemExit) as exc:
             raise ExternsFileFailed(path, f"it raised {_describe(exc)}", _where(exc)) from None
-        return _wrap(again, externs, path)
+        return _wrap(again, externs)
 
     return make
 
@@ -164,16 +164,16 @@ def _check_names(impl: dict, externs: list[m.Function], path: str, diags: Diagno
                 diags.add("W0830", None, f"`externs()` in {path} returns `{k}`, which is no extern of the design")
 
 
-def _wrap(impl: dict, externs: list[m.Function], path: str) -> dict:
+def _wrap(impl: dict, externs: list[m.Function]) -> dict:
     out = {}
     for f in externs:
         fn = impl.get(f.name)
         if callable(fn):
-            out[f.name] = _checked_call(f, fn, path)
+            out[f.name] = _checked_call(f, fn)
     return out
 
 
-def _checked_call(f: m.Function, fn: Callable, path: str) -> Callable:
+def _checked_call(f: m.Function, fn: Callable) -> Callable:
     def call(*args):
         try:
             value = fn(*(clone(a) for a in args))
