@@ -100,6 +100,8 @@ def _examples() -> list[tuple[Path, Path]]:
     pairs.append((ROOT / "tests/naming/rcs_runtime.rcs", ROOT / "tests/naming/scenarios.scn"))
     # Every block of std.blocks; a controller type with two instances.
     pairs.append((ROOT / "tests/blocks/blocks.rcs", ROOT / "tests/blocks/blocks.scn"))
+    # Array arguments of types and blocks written as literals; negative zeros.
+    pairs.append((ROOT / "tests/params/array_params.rcs", ROOT / "tests/params/array_params.scn"))
     return pairs
 
 

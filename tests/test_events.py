@@ -124,6 +124,20 @@ def test_every_example_scenario_passes_on_the_compiled_program(target: str, tmp_
     assert f'tests="{n}" failures="0" errors="0"' in junit.read_text(encoding="utf-8")
 
 
+@pytest.mark.parametrize("target", ["c", "rust", "ada"])
+def test_expectations_see_what_the_simulator_sees_on_every_target(target: str, tmp_path: Path) -> None:
+    """Negative zero keeps its sign from the program's trace to the
+    expectations (JSON reads `-0` as the integer 0), and array arguments of
+    types and blocks take their parameters' element types: the same
+    expectations pass in the simulator and on each compiled target."""
+    design = ROOT / "tests/params/array_params.rcs"
+    sim = rcsc("test", str(design))
+    assert sim[0] == 0 and sim[1].endswith("1 passed, 0 failed\n"), sim[1]
+    rc, out, _ = rcsc("test", "--target", target, "--build-dir", str(tmp_path / "b"), str(design))
+    assert rc == 0, out
+    assert untimed(out) == untimed(sim[1])
+
+
 def test_a_failing_scenario_fails_on_c_and_rust_and_the_build_is_reused(tmp_path: Path) -> None:
     folder = tmp_path / "sub"
     (folder / "scenarios").mkdir(parents=True)

@@ -156,8 +156,24 @@ def _typed(value: ast.Expr, t: ast.TypeRef | None) -> ast.Expr:
     argument made with them is converted to the parameter's declared type:
     with `k: u32 = 4294967295`, `-k` wraps as a u32 (not an out-of-range
     literal), and with `g: f64 = 2`, `g / 4` is 0.5 wherever it stands (not an
-    i32 division) -- as with a typed constant."""
-    if t is None or t.elem is not None or t.name.name not in ("i32", "i64", "u32", "f64") or not _has_int_literal(value):
+    i32 division) -- as with a typed constant.  An array written out
+    (`[4294967295, 2]`, `[2; 4]`) for a `[u32; 2]` parameter has each element
+    converted to the element type, at any depth."""
+    if t is None or not _has_int_literal(value):
+        return value
+    if t.elem is not None:
+        if isinstance(value, ast.ArrayLit):
+            items = [_typed(x, t.elem) for x in value.items]
+            out: ast.Expr = ast.ArrayLit(value.span, items)
+        elif isinstance(value, ast.ArrayRepeat):
+            out = ast.ArrayRepeat(value.span, _typed(value.value, t.elem), value.count)
+        else:
+            return value
+        depth = getattr(value, "depth", None)
+        if depth is not None:
+            out.depth = depth + 1
+        return out
+    if t.name.name not in ("i32", "i64", "u32", "f64"):
         return value
     call = ast.Call(value.span, ast.Ident(value.span, t.name.name), [ast.Arg(value.span, None, value)])
     depth = getattr(value, "depth", None)

@@ -88,6 +88,16 @@ def build(design: m.Design, target_name: str, build_root: str) -> Build:
     return Build(folder, program, multi)
 
 
+def _trace_int(text: str):
+    """A number without a point or an exponent in a trace line.
+
+    The programs print an f64 that is a whole number without a point, so
+    negative zero is `-0`, which JSON reads as the integer 0: its sign,
+    which an expectation can observe (`1.0 / x`, `copysign`), would be
+    lost.  No integer is ever printed as `-0`, so this is the f64."""
+    return -0.0 if text == "-0" else int(text)
+
+
 def _value(v, t: Type):
     """A trace value as the simulator holds it."""
     if isinstance(t, RecordType):
@@ -178,7 +188,7 @@ def run_compiled(design: m.Design, sc: Scenario, b: Build, work: Path) -> RunRes
     if r.returncode != 0:
         raise CompiledError(f"the program exited with status {r.returncode}:\n{r.stderr[-3000:]}")
     try:
-        lines = [json.loads(x) for x in trace.read_text(encoding="utf-8").splitlines()]
+        lines = [json.loads(x, parse_int=_trace_int) for x in trace.read_text(encoding="utf-8").splitlines()]
         snaps = snapshots(design, sc, lines, b.multi)
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise CompiledError(f"the program's trace is unreadable: {exc}") from exc
