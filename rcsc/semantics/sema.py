@@ -26,6 +26,25 @@ _RESERVED = set(BUILTIN_TYPES) | set(BUILTIN_FUNCS) | set(MATH_FUNCS) | CONVERSI
 RESERVED_NAMES = frozenset(_RESERVED)
 
 
+# What `NAME.attr` reads instead of a status field called `attr`: a
+# supervisor's view of its subordinate (docs/language.md §9.4) and a
+# scenario's view of a controller (docs/scenarios.md) are looked up before
+# the status fields, so such a field is never seen there (W0101).
+_SUPERVISOR_AND_SCENARIO = "its supervisor or a scenario"
+_BUILT_IN_VIEW: dict[str, tuple[str, str]] = {
+    "done": (_SUPERVISOR_AND_SCENARIO, "whether its plan has finished"),
+    "error": (_SUPERVISOR_AND_SCENARIO, "whether its plan has failed"),
+    "executing": (_SUPERVISOR_AND_SCENARIO, "whether a plan is executing"),
+    "error_code": (_SUPERVISOR_AND_SCENARIO, "the code of its last `error(...)`"),
+    "age": ("its supervisor", "the age of the status the supervisor reads"),
+    "echo": ("a scenario", "the serial number of the last command it took"),
+    "status": ("a scenario", "its status value"),
+    "state": ("a scenario", "its plan's current state"),
+    "rule": ("a scenario", "the rule that fired last"),
+    "verb": ("a scenario", "the verb it executes"),
+}
+
+
 def _doc(node) -> str:
     """The text of the doc comment of an AST node, or ""."""
     doc = getattr(node, "doc", None)
@@ -338,6 +357,11 @@ class _Sema:
             if n in c.status_fields or n in c.locals:
                 self.d.add("E0101", decl.name.span, f"`{n}` is defined more than once in `{name}`", f"repeated {what}")
                 continue
+            if table is c.status_fields and n in _BUILT_IN_VIEW:
+                who, what = _BUILT_IN_VIEW[n]
+                self.d.add("W0101", decl.name.span, f"status field `{n}` cannot be read by {who}", "named like a built-in status").with_note(
+                    f"`{name}.{n}` reads {what}, not this field"
+                ).with_help(f"give the field a name of its own, such as `{n}_value`")
             t = self.type_ref(decl.type)
             var = m.Var(n, t, decl.span, range=self.range_of(decl.type, t, checker), doc=_doc(decl))
             if not isinstance(t, ErrorType):
