@@ -193,6 +193,7 @@ class Ctrl:
     # A controller type: its name, value parameters, and its instances (name, arguments).
     type_name: str = ""
     tparams: list[tuple[str, str]] = field(default_factory=list)
+    atparams: list[tuple[str, str]] = field(default_factory=list)  # array value parameters
     instances: list[tuple[str, str]] = field(default_factory=list)
     instance_of: "Ctrl | None" = None
 
@@ -290,6 +291,12 @@ class DesignGen:
         # infinities as values, durations near the ends of their range.
         self.x_rng = random.Random(seed ^ 0x7E57)
         self.more = features and self.x_rng.random() < 0.6
+        # Array value parameters of controller types and blocks, their
+        # arguments written out with integer literals (a stream of its own):
+        # each element takes the parameter's element type, as in a typed
+        # constant (`[u32; 2]` given `[4294967295, 2]` wraps as u32).
+        self.tp_rng = random.Random(seed ^ 0x7A9A)
+        self.acc_wrap = features and self.tp_rng.random() < 0.5  # the user block ACC has `w: [u32; 2]`
         self.sub_values: set[str] = set()  # the names of those status values
 
     # ---- types and values ------------------------------------------------------------
@@ -678,6 +685,23 @@ class DesignGen:
             return f"[{one()}; {size}]"
         return "[" + ", ".join(one() for _ in range(n)) + "]"
 
+    def int_array_literal(self, t: str) -> str:
+        """An array of type t written out with integer literals wherever they
+        may stand (f64 elements too), at the edges of the element type."""
+        tp = self.tp_rng
+        elem, n = self.arrays[t]
+
+        def one() -> str:
+            if elem in self.arrays:
+                return self.int_array_literal(elem)
+            if elem == "f64":
+                return tp.choice(["1", "3", "(-2)", "0", "2147483647", "4294967295", "(-9007199254740993)"])
+            return self.literal(elem, tp)
+
+        if tp.random() < 0.25:
+            return f"[{one()}; {t.rsplit(';', 1)[1].strip()[:-1]}]"
+        return "[" + ", ".join(one() for _ in range(n)) + "]"
+
     def index(self, n: int, scope: list[Var]) -> str:
         """An index into an array of n elements: in range, out of range, or a
         variable (an input the scenario sets to an edge) that may be either."""
@@ -867,17 +891,20 @@ class DesignGen:
         c.type_name = n.fresh("Ty")
         c.tparams = [(n.fresh("k"), ct.choice(["f64", "f64", "i32", "i64", "u32", "bool", "duration"]))
                      for _ in range(ct.randint(0, 3))]
+        tp = self.tp_rng
+        if self.arrays and tp.random() < 0.7:
+            c.atparams = [(n.fresh("ka"), tp.choice(sorted(self.arrays))) for _ in range(tp.randint(1, 2))]
         for w in c.writes:  # the type writes through `gm` parameters named like its outputs
             self.gm_out.remove(w)
         names = [c.name] + [n.fresh("C", upper=True) for _ in range(ct.randint(1, 2))]
         for name in names:
-            vals = [self.literal(t, ct) for _, t in c.tparams]
+            vals = [self.literal(t, ct) for _, t in c.tparams] + [self.int_array_literal(t) for _, t in c.atparams]
             outs = []
             for w in c.writes:
                 g = Var(n.fresh("out"), w.type)
                 self.gm_out.append(g)
                 outs.append(g.name)
-            params = [p for p, _ in c.tparams] + [w.name for w in c.writes]
+            params = [p for p, _ in c.tparams + c.atparams] + [w.name for w in c.writes]
             values = vals + outs
             if ct.random() < 0.5:
                 args = ", ".join(values)
@@ -910,6 +937,8 @@ class DesignGen:
                     vals = [(p, b.choice(vs)) for p, vs in params]
                 else:
                     vals = [("g", b.choice(_F))]
+                    if self.acc_wrap:
+                        vals.append(("w", "[" + ", ".join(self.tp_rng.choice(INT_EDGES["u32"] + ["0", "1", "2", "3"]) for _ in range(2)) + "]"))
                     inputs = [("x", "f64"), ("i", "i32")]
                     outputs = [("y", "f64")]
                 if b.random() < 0.5:
@@ -920,6 +949,12 @@ class DesignGen:
 
     def user_block(self, name: str) -> list[str]:
         """A block of the design's own, with an array state indexed by an input."""
+        if self.acc_wrap:
+            # `w[1] - 3` wraps as a u32 when w[1] < 3, and `w[0] * 2` may.
+            return [f"block {name}(g: f64, w: [u32; 2]) {{", "    input x: f64 = 0.0", "    input i: i32 = 0",
+                    "    state buf: [f64; 3] = [0.0, (-0.0), 1.0]", "    output y: f64 = 0.0", "    step {",
+                    "        buf[i] = x * g + f64(w[1] - 3) - f64(w[0] * 2);",
+                    "        y = sum(buf) + min_of(buf) - max_of(buf) + buf[i + 1];", "    }", "}"]
         return [f"block {name}(g: f64) {{", "    input x: f64 = 0.0", "    input i: i32 = 0",
                 "    state buf: [f64; 3] = [0.0, (-0.0), 1.0]", "    output y: f64 = 0.0", "    step {",
                 "        buf[i] = x * g;", "        y = sum(buf) + min_of(buf) - max_of(buf) + buf[i + 1];", "    }", "}"]
@@ -1199,7 +1234,7 @@ class DesignGen:
                 continue
             kind = "simulator" if c.simulator else "controller"
             if c.type_name:
-                tps = [f"{p}: {t}" for p, t in c.tparams] + [f"{w.name}: gm" for w in c.writes]
+                tps = [f"{p}: {t}" for p, t in c.tparams + c.atparams] + [f"{w.name}: gm" for w in c.writes]
                 out.append(f"{kind} type {c.type_name}({', '.join(tps)}) level {c.level} budget 100 us {{")
             else:
                 period = f" period {self.periods[c.name]} ms" if c.name in self.periods else ""
@@ -1246,7 +1281,7 @@ class DesignGen:
             own = [(v.name, v.type) for v in c.alocals + c.astatus + c.awrites]
             own += [(f"{w.name}.{self.arecords[w.type].fields[0][0]}", self.arecords[w.type].fields[0][1]) for w in c.arecs]
             self.atargets = own
-            self.actx = own + [(v.name, v.type) for v in c.areads + self.aconsts]
+            self.actx = own + [(v.name, v.type) for v in c.areads + self.aconsts] + list(c.atparams)
             self.actx += [(f"{s.name}.{v.name}", v.type) for s in c.subs for v in s.astatus]
             self.aidx = [f"{w.name}.{self.arecords[w.type].fields[1][0]}" for w in c.arecs]
             self.bcalls = [(inst, inputs) for inst, _, _, inputs, _ in c.blocks]

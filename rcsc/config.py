@@ -187,6 +187,8 @@ def _read_table(table: dict, config: Config, source: SourceFile, section: str, d
                     bad(key, f"unknown diagnostic code `{code}`", "unknown code", code)
                 elif not code.startswith("W"):
                     bad(key, f"the severity of error `{code}` cannot be changed", "an error stays an error", code)
+                elif not isinstance(level, str):
+                    bad(key, f"the severity of `{code}` must be a string: \"error\", \"warning\" or \"note\"", "not a string", code)
                 elif level not in SEVERITIES:
                     bad(key, f"unknown severity `{level}` (use \"error\", \"warning\" or \"note\")", "unknown severity", code)
                 else:

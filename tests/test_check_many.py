@@ -164,6 +164,28 @@ def test_config_mistakes_are_findings_with_spans_not_tracebacks(tmp_path, monkey
         "proj/rcsc.toml:1:1: error[E0009]: `select` must be a list of strings",
         'proj/rcsc.toml:3:1: error[E0009]: `per-file-ignores."x"` must be a list of codes',
     ]
+    (proj / "rcsc.toml").write_text('[severity]\nW0403 = ["error"]\n')
+    rc, lines, _ = _short(["proj/b.rcs"], capsys)
+    assert [line for line in lines if "rcsc.toml" in line] == [
+        'proj/rcsc.toml:2:1: error[E0009]: the severity of `W0403` must be a string: "error", "warning" or "note"',
+    ]
+
+
+# Every kind of TOML value, for every place a value can stand in the
+# configuration: each is a finding or accepted, never an internal error.
+_TOML_VALUES = ['"W"', "3", "1.5", "true", "1979-05-27", '["W0403"]', "[1, 2]", '[["W"]]', "{a = 1}", '["error"]', "[]", "{}"]
+
+
+@pytest.mark.parametrize("where", ["select = {}", "ignore = {}", "exclude = {}", "severity = {}", "per-file-ignores = {}",
+                                   "[severity]\nW0403 = {}", "[severity]\nE0100 = {}", "[per-file-ignores]\n\"*.rcs\" = {}",
+                                   "[severity.W0403]\nx = {}", "[[severity]]\nW0403 = {}"])
+def test_every_toml_value_anywhere_is_a_finding_or_accepted(where, tmp_path, monkeypatch, capsys) -> None:
+    proj = _tree(tmp_path, monkeypatch)
+    for value in _TOML_VALUES:
+        (proj / "rcsc.toml").write_text(where.format(value) + "\n")
+        rc, lines, err = _short(["proj/b.rcs"], capsys)
+        assert rc in (0, 1) and err == "", (where, value, err)
+        assert not any("internal" in line for line in lines), (where, value, lines)
 
 
 def test_command_line_overrides_and_no_config(tmp_path, monkeypatch, capsys) -> None:
