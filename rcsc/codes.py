@@ -1303,7 +1303,11 @@ Fixed:
 """),
     ("E0605", _E, "design has no CPU", """
 A design needs at least one `cpu` with a heartbeat and a schedule to say where
-and how often its controllers run.
+and how often its controllers run. This holds for a design without
+controllers too: a design is what runs (the simulator steps its CPUs, and
+`rcsc build` makes one Main Program per CPU), so one with nothing to run is
+refused rather than simulated as nothing. Declarations shared by several
+designs belong in a `module` file that the designs import.
 """),
 ]
 

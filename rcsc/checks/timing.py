@@ -24,10 +24,16 @@ def budget_table(design: Design, cpu: m.Cpu) -> list[tuple[str, int]]:
 
 
 def check(design: Design, diags: Diagnostics) -> None:
-    if design.controllers and not design.cpus:
-        diags.add("E0605", design.span, f"design `{design.name}` has no `cpu`", "no cpu").with_help(
-            "add `cpu main { heartbeat 30 ms  schedule A, B, C }`"
-        )
+    if not design.cpus:
+        # A design is what runs: without a CPU there is no Main Program to
+        # build and nothing for the simulator to step, even with no controller.
+        diag = diags.add("E0605", design.span, f"design `{design.name}` has no `cpu`", "no cpu")
+        if design.controllers:
+            diag.with_help("add `cpu main { heartbeat 30 ms  schedule A, B, C }`")
+        else:
+            diag.with_note("a design runs as the Main Program of each CPU, which steps the controllers it schedules").with_help(
+                "declare a controller, and `cpu main { heartbeat 30 ms  schedule NAME }`; "
+                "declarations shared by several designs go in a `module` file that each design imports")
         return
     placed: dict[str, tuple[m.Cpu, m.NameUse]] = {}
     for cpu in design.cpus.values():
