@@ -1100,6 +1100,12 @@ def _main(argv: list[str] | None) -> int:
     command = _command_in(argv)
     # Without a known command word argparse only prints usage or the version.
     args = build_parser(command or "").parse_args(argv)
+    # The files named as inputs are inputs even where the command stops
+    # before reading them (`rcsc test s.scn --junit s.scn` with no design
+    # beside the scenario): no report may replace them.  Folders and
+    # patterns are claimed file by file as they are read.
+    named = [getattr(args, key, None) for key in ("path", "scenario", "externs", "config")] + list(getattr(args, "paths", None) or [])
+    safeio.claim_inputs(p for p in named if isinstance(p, str) and p != "-")
     code = args.run(args)
     if not sys.stdout.closed:  # the language server closes it on `exit`
         sys.stdout.flush()  # a broken pipe surfaces here, inside the handlers
@@ -1127,7 +1133,8 @@ def entry() -> None:
 def main(argv: list[str] | None = None) -> int:
     """Run rcsc with `argv` (default: sys.argv[1:]) and return the exit code."""
     try:
-        return _main(argv)
+        with safeio.command_files():
+            return _main(argv)
     except SystemExit as exc:
         # argparse exits for --help/--version (0) and usage errors (2), having
         # printed its message; return the code so that main() always returns.

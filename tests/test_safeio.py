@@ -239,3 +239,43 @@ def test_check_and_test_do_not_block_on_a_fifo(tmp_path: Path, capsys) -> None:
     assert main(["check", "/dev/zero"]) == 2
     main(["test", str(folder)])
     assert time.monotonic() - start < 30.0
+
+
+def test_no_report_replaces_an_input_of_the_same_command(tmp_path: Path, capsys) -> None:
+    """`-o`, `--step-log` and `--junit` name files the user chose, but never
+    the design, one of its imports or the scenario the command reads, under
+    any spelling (a link, `./`), nor another report of the same command."""
+    folder = tmp_path / "sub"
+    (folder / "scenarios").mkdir(parents=True)
+    design = folder / "submarine.rcs"
+    design.write_text(SUBMARINE.read_text())
+    scn = folder / "scenarios" / "init.scn"
+    scn.write_text("cycles 12\nat 1: SM.INIT()\nexpect within 1..12: SM.done\n")
+    (folder / "link.rcs").symlink_to("submarine.rcs")
+    before = _snapshot(folder)
+    d, s = str(design), str(scn)
+    attempts = [
+        ["check", d, "-o", d],
+        ["check", d, "-o", str(folder / "link.rcs")],
+        ["sim", d, "--scenario", s, "-o", s],
+        ["sim", d, "--scenario", s, "-o", str(folder / "scenarios" / ".." / "submarine.rcs")],
+        ["sim", d, "--scenario", s, "--step-log", d],
+        ["events", d, s, "-o", s],
+        ["graph", d, "--format", "dot", "-o", d],
+        ["test", d, "--junit", d],
+        ["test", s, "--junit", s],  # fails before it reads the scenario (no design beside it)
+    ]
+    for argv in attempts:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert "it is an input of this command" in err or "no single design file" in err, (argv, err)
+        assert _snapshot(folder) == before, argv
+    # Two reports of one command to one file: the second is refused.
+    trace = tmp_path / "t.jsonl"
+    assert main(["sim", d, "--scenario", s, "-o", str(trace), "--step-log", str(trace)]) == 2
+    assert "already wrote another report to it" in capsys.readouterr().err
+    # Writing the same report again in another command is what -o is for,
+    # and a device takes any number of reports.
+    assert main(["sim", d, "--scenario", s, "-o", str(trace)]) == 0
+    assert main(["sim", d, "--scenario", s, "-o", str(trace)]) == 0
+    assert main(["sim", d, "--scenario", s, "-o", os.devnull, "--step-log", os.devnull]) == 0

@@ -37,7 +37,8 @@ import shutil
 import signal
 import stat
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 # Designs of 200 controllers are ~5 MB; 64 MiB leaves room and stops
@@ -53,6 +54,60 @@ class InputError(OSError):
     """An input that rcsc refuses to read (not a regular file, too large)."""
 
 
+# The files one command has read and the reports it has written, by device
+# and inode (so a link or another spelling of the path is the same file):
+# `rcsc sim d.rcs --scenario s.scn -o s.scn` must not replace the scenario
+# it just read with its trace, nor `-o t.jsonl --step-log t.jsonl` write two
+# reports over each other.  None outside a command (`command_files`), so a
+# long-running server does not remember files between requests.
+_seen: dict[tuple[int, int], tuple[str, str]] | None = None
+
+
+@contextmanager
+def command_files() -> Iterator[None]:
+    """Remember the files read and the reports written while the block runs."""
+    global _seen
+    outer, _seen = _seen, {}
+    try:
+        yield
+    finally:
+        _seen = outer
+
+
+def _note(what: str, st: os.stat_result, path: str) -> None:
+    if _seen is not None:
+        _seen.setdefault((st.st_dev, st.st_ino), (what, path))
+
+
+def claim_inputs(paths: Iterable[str]) -> None:
+    """Count the regular files among `paths` as inputs of this command."""
+    for path in paths:
+        try:
+            st = os.stat(path)
+        except (OSError, ValueError):
+            continue
+        if stat.S_ISREG(st.st_mode):
+            _note("input", st, path)
+
+
+def _refuse_seen(path: str) -> None:
+    """Refuse a report over a file this command read or already wrote."""
+    if not _seen:
+        return
+    try:
+        st = os.stat(path)
+    except OSError:
+        return  # nothing there (or a dangling link): nothing to lose
+    seen = _seen.get((st.st_dev, st.st_ino))
+    if seen is None:
+        return
+    what, first = seen
+    same = "" if os.path.normpath(first) == os.path.normpath(path) else f" (`{first}`)"
+    if what == "input":
+        raise FileExistsError(f"it is an input of this command{same}; refusing to replace it with a report")
+    raise FileExistsError(f"this command already wrote another report to it{same}")
+
+
 def read_input(path: str, limit: int = MAX_INPUT) -> bytes:
     """The bytes of a regular file of at most `limit` bytes; InputError otherwise.
 
@@ -65,6 +120,7 @@ def read_input(path: str, limit: int = MAX_INPUT) -> bytes:
         st = os.fstat(fd)
         if not stat.S_ISREG(st.st_mode):
             raise InputError(f"`{path}` is not a regular file")
+        _note("input", st, path)
         if st.st_size > limit:
             raise InputError(f"`{path}` is {st.st_size} bytes; the limit is {limit} bytes")
         chunks, size = [], 0
@@ -108,6 +164,8 @@ def write_file(
     replaced atomically.
     """
     directory = os.path.dirname(path) or "."
+    if may_replace is None:
+        _refuse_seen(path)
     if os.path.lexists(path):
         st = os.lstat(path)
         if may_replace is not None:
@@ -122,6 +180,7 @@ def write_file(
             # replace the device or the link itself.
             with open(path, "wb") as out:
                 out.write(data)
+            _note_report(path)
             return
     fd, tmp = tempfile.mkstemp(prefix=".rcsc-", suffix=".tmp", dir=directory)
     try:
@@ -132,6 +191,19 @@ def write_file(
     except BaseException:
         _unlink_quietly(tmp)
         raise
+    if may_replace is None:
+        _note_report(path)
+
+
+def _note_report(path: str) -> None:
+    """Remember a report written to a regular file (a device such as
+    /dev/null may take any number of reports)."""
+    try:
+        st = os.stat(path)
+    except OSError:
+        return
+    if stat.S_ISREG(st.st_mode):
+        _note("report", st, path)
 
 
 def _umask() -> int:
