@@ -445,8 +445,8 @@ def _checked_scenario(design_path: str, scenario_path: str):
         _report_to_stderr(result.diags)
         return None
     try:
-        text = safeio.read_input(scenario_path).decode("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
+        text = safeio.read_text(scenario_path)
+    except OSError as exc:
         raise UsageError(f"{scenario_path}: cannot read: {getattr(exc, 'strerror', None) or exc}") from exc
     diags = Diagnostics()
     sc = text_to_scenario(SourceFile(scenario_path, text), result.model, diags)
@@ -709,8 +709,8 @@ def _run_budget(args: argparse.Namespace) -> int:
         design, result_diags = result.model, result.diags
     for path in args.measured:
         try:
-            text = safeio.read_input(path).decode("utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
+            text = safeio.read_text(path)
+        except OSError as exc:
             raise UsageError(f"{path}: cannot read: {getattr(exc, 'strerror', None) or exc}") from exc
         run = measured.parse_run(path, text, diags)
         if run is not None:
@@ -888,7 +888,6 @@ def _add_fmt_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _run_fmt(args: argparse.Namespace) -> int:
-    import difflib
     import stat
 
     from rcsc import config as cfg
@@ -896,13 +895,7 @@ def _run_fmt(args: argparse.Namespace) -> int:
     from rcsc.front import workspace
 
     if args.paths == ["-"]:
-        text = sys.stdin.read()
-        formatted, diags = fmt.format_source("<stdin>", text)
-        if formatted is None:
-            _report_to_stderr(diags)
-            return EXIT_FINDINGS
-        _write(sys.stdout, formatted)
-        return EXIT_OK
+        return _fmt_stdin(args)
     expanded = workspace.expand(args.paths)
     for problem in expanded.problems:
         _error(problem)
@@ -915,9 +908,8 @@ def _run_fmt(args: argparse.Namespace) -> int:
             if found and cfg.load(found[0], found[1], Diagnostics()).excluded(path):
                 continue
         try:
-            raw = safeio.read_input(path)
-            text = raw.decode("utf-8")
-        except (OSError, safeio.InputError, UnicodeDecodeError) as exc:
+            text = safeio.read_text(path)
+        except OSError as exc:
             _error(f"{path}: cannot read: {getattr(exc, 'strerror', None) or exc}")
             code = EXIT_USAGE
             continue
@@ -929,28 +921,77 @@ def _run_fmt(args: argparse.Namespace) -> int:
         if formatted == text:
             unchanged += 1
             continue
-        changed += 1
         if args.diff:
-            diff = difflib.unified_diff(
-                text.splitlines(keepends=True), formatted.splitlines(keepends=True),
-                *((path, path) if os.path.isabs(path) else (f"a/{path}", f"b/{path}")),
-            )
-            _write(sys.stdout, render.escape_controls("".join(diff)))
+            _write(sys.stdout, _fmt_diff(path, text, formatted))
         if args.check or args.diff:
+            changed += 1
             if args.check:
                 _write(sys.stderr, f"would reformat {render.escape_controls(path)}\n")
                 code = max(code, EXIT_FINDINGS) if code != EXIT_USAGE else code
             continue
         try:
-            mode = stat.S_IMODE(os.stat(path).st_mode)
-            safeio.write_file(path, formatted.encode("utf-8"), may_replace=lambda _p: True, mode=mode)
+            st = os.stat(path)
+            _fmt_may_write(path, st)
+            safeio.write_file(path, formatted.encode("utf-8"), may_replace=lambda _p: True, mode=stat.S_IMODE(st.st_mode))
         except OSError as exc:
-            _error(f"cannot write `{path}`: {exc.strerror or exc}")
+            _error(f"cannot write `{render.escape_controls(path)}`: {exc.strerror or exc}")
             code = EXIT_USAGE
+            continue
+        changed += 1
     if not args.quiet:
         verb = "would be reformatted" if (args.check or args.diff) else "reformatted"
         _write(sys.stderr, f"{changed} file{'s' if changed != 1 else ''} {verb}, {unchanged} unchanged\n")
     return code
+
+
+def _fmt_stdin(args: argparse.Namespace) -> int:
+    """`rcsc fmt -`: standard input formatted to standard output; with
+    `--check` nothing is printed and the exit code says whether the text
+    would change, with `--diff` the diff is printed instead."""
+    from rcsc.editor import fmt
+
+    raw = sys.stdin.buffer.read() if hasattr(sys.stdin, "buffer") else sys.stdin.read().encode("utf-8", "surrogateescape")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        _error(f"<stdin>: cannot read: not UTF-8 text (byte {exc.start})")
+        return EXIT_USAGE
+    formatted, diags = fmt.format_source("<stdin>", text)
+    if formatted is None:
+        _report_to_stderr(diags)
+        return EXIT_FINDINGS
+    if not (args.check or args.diff):
+        _write(sys.stdout, formatted)
+        return EXIT_OK
+    if formatted == text:
+        return EXIT_OK
+    if args.diff:
+        _write(sys.stdout, _fmt_diff("<stdin>", text, formatted))
+    if args.check:
+        _write(sys.stderr, "would reformat <stdin>\n")
+        return EXIT_FINDINGS
+    return EXIT_OK
+
+
+def _fmt_diff(path: str, text: str, formatted: str) -> str:
+    import difflib
+
+    names = (path, path) if os.path.isabs(path) or path == "<stdin>" else (f"a/{path}", f"b/{path}")
+    diff = difflib.unified_diff(text.splitlines(keepends=True), formatted.splitlines(keepends=True), *names)
+    return render.escape_controls("".join(diff))
+
+
+def _fmt_may_write(path: str, st: os.stat_result) -> None:
+    """Refuse to format a file its owner made read-only, or one with other
+    hard links: the new text is written beside it and renamed over it (so
+    that it is never half written), which would ignore the one (root may
+    rename over anything) and separate it from the others."""
+    import stat
+
+    if not os.access(path, os.W_OK) or (st.st_uid == os.geteuid() and not st.st_mode & stat.S_IWUSR):
+        raise PermissionError(f"it is read-only (mode {stat.S_IMODE(st.st_mode):o}); not reformatted")
+    if st.st_nlink > 1:
+        raise FileExistsError(f"it has {st.st_nlink} hard links, which replacing it would separate; not reformatted")
 
 
 # ---------------------------------------------------------------------------

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 from rcsc.codes import CODES
 from rcsc.diagnostics import Diagnostic, Diagnostics, Severity
 from rcsc.front.source import SourceFile, Span
+from rcsc.outputs import safeio
 
 CONFIG_NAME = "rcsc.toml"
 PYPROJECT = "pyproject.toml"
@@ -132,10 +133,8 @@ def load(path: str, in_pyproject: bool, diags: Diagnostics) -> Config:
 
     config = Config(root=os.path.dirname(os.path.abspath(path)) or ".", path=path)
     try:
-        with open(path, "rb") as f:
-            data = f.read()
-        text = data.decode("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
+        text = safeio.read_text(path)
+    except OSError as exc:
         diags.add("E0009", None, f"cannot read the configuration `{path}`: {getattr(exc, 'strerror', None) or exc}")
         return config
     source = SourceFile(path, text)

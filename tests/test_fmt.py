@@ -154,3 +154,50 @@ def test_fmt_stdin_to_stdout(monkeypatch, capsys) -> None:
     monkeypatch.setattr("sys.stdin", io.StringIO("design d\n\n\n\nconst X: i32 = 1\t\n"))
     assert cli.main(["fmt", "-"]) == 0
     assert capsys.readouterr().out == "design d\n\nconst X: i32 = 1\n"
+
+
+class _Stdin:
+    """Standard input as bytes, as a terminal or a pipe gives it."""
+
+    def __init__(self, data: bytes) -> None:
+        import io
+
+        self.buffer = io.BytesIO(data)
+
+
+def test_fmt_stdin_check_and_diff_say_whether_it_would_change(monkeypatch, capsys) -> None:
+    """A CI step that pipes a file through `rcsc fmt --check -` must fail on
+    unformatted text (it used to print the formatted text and pass)."""
+    messy, tidy = b"design d\n\n\n\nconst X: i32 = 1\t\n", b"design d\n\nconst X: i32 = 1\n"
+    monkeypatch.setattr("sys.stdin", _Stdin(messy))
+    assert cli.main(["fmt", "--check", "-"]) == 1
+    out, err = capsys.readouterr()
+    assert out == "" and err == "would reformat <stdin>\n"
+    monkeypatch.setattr("sys.stdin", _Stdin(messy))
+    assert cli.main(["fmt", "--diff", "-"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("--- <stdin>\n+++ <stdin>\n") and "\n+const X: i32 = 1\n" in out
+    monkeypatch.setattr("sys.stdin", _Stdin(tidy))
+    assert cli.main(["fmt", "--check", "--diff", "-"]) == 0
+    assert capsys.readouterr() == ("", "")
+    monkeypatch.setattr("sys.stdin", _Stdin(b"design d\xff\n"))
+    assert cli.main(["fmt", "-"]) == 2
+    assert capsys.readouterr().err == "error: <stdin>: cannot read: not UTF-8 text (byte 8)\n"
+
+
+def test_fmt_refuses_read_only_files_and_hard_links_and_counts_only_what_it_wrote(tmp_path: Path, capsys) -> None:
+    messy = "design d\nconst X: i32 = 1   \n"
+    ro, linked, ok = tmp_path / "ro.rcs", tmp_path / "linked.rcs", tmp_path / "ok.rcs"
+    for f in (ro, linked, ok):
+        f.write_text(messy)
+    ro.chmod(0o444)
+    os.link(linked, tmp_path / "other_name.rcs")
+    assert cli.main(["fmt", str(ro), str(linked), str(ok)]) == 2
+    err = capsys.readouterr().err
+    assert f"cannot write `{ro}`: it is read-only (mode 444); not reformatted" in err
+    assert f"cannot write `{linked}`: it has 2 hard links, which replacing it would separate; not reformatted" in err
+    assert err.endswith("1 file reformatted, 0 unchanged\n")
+    assert ro.read_text() == messy and linked.read_text() == messy and (tmp_path / "other_name.rcs").read_text() == messy
+    assert ok.read_text() == "design d\nconst X: i32 = 1\n"
+    assert cli.main(["fmt", "--check", str(ro)]) == 1  # reading is fine
+    capsys.readouterr()

@@ -42,7 +42,7 @@ def _read(path: str) -> str:
         raise InputError(str(exc)) from exc
     try:
         return data.decode("utf-8")
-    except UnicodeDecodeError as exc:
+    except UnicodeDecodeError as exc:  # the wording of `safeio.read_text`
         raise InputError(f"{path}: not UTF-8 text (byte {exc.start})") from exc
 
 

@@ -90,6 +90,16 @@ def claim_inputs(paths: Iterable[str]) -> None:
             _note("input", st, path)
 
 
+def read_text(path: str, limit: int = MAX_INPUT) -> str:
+    """`read_input` decoded as UTF-8; a file that is not UTF-8 text is an
+    InputError that says where (`not UTF-8 text (byte 9)`)."""
+    data = read_input(path, limit)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"not UTF-8 text (byte {exc.start})") from exc
+
+
 def _refuse_seen(path: str) -> None:
     """Refuse a report over a file this command read or already wrote."""
     if not _seen:

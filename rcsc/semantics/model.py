@@ -431,6 +431,9 @@ class Design(Fields):
     controllers: dict[str, Controller] = field(default_factory=dict)
     cpus: dict[str, Cpu] = field(default_factory=dict)
     files: list[str] = field(default_factory=list)
+    # The root is a module checked on its own (`rcsc check lib.rcs`, a file
+    # nobody imports): declarations, not something that runs.
+    is_module: bool = False
     # Filled in by the timing check: GM variables in declaration order, then
     # command and status buffers in controller declaration order.
     crossings: list[Crossing] = field(default_factory=list)

@@ -585,6 +585,7 @@ def ast_to_model(files: list[LoadedFile], diags: Diagnostics, release_plans: boo
     s.bodies()
     head = root.tree.name.span if root.tree is not None and root.tree.name is not None else Span(root.source, 0, 0)
     design = m.Design(name, head)
+    design.is_module = root.tree is not None and root.tree.kind != "design"
     design.enums = {k: t for k, t in s.g.types.items() if isinstance(t, EnumType)}
     design.records = {k: t for k, t in s.g.types.items() if isinstance(t, RecordType)}
     design.consts = dict(s.g.consts)

@@ -87,8 +87,8 @@ def load(path: str, design: m.Design, diags: Diagnostics) -> Callable[[], dict] 
     runs once here, to report what is wrong before anything is simulated;
     that first instance serves the first CPU."""
     try:
-        text = safeio.read_input(path).decode("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
+        text = safeio.read_text(path)
+    except OSError as exc:
         diags.add("E0830", None, f"cannot read the externs file {path}: {getattr(exc, 'strerror', None) or exc}")
         return None
     # Modules beside the file import as they would with `python FILE.py`.
@@ -264,8 +264,8 @@ def _span_in(file: str, text: str | None, line: int, col: int | None) -> Span | 
     """A span in `file` (read unless `text` is given), or None if it cannot be read."""
     if text is None:
         try:
-            text = safeio.read_input(file).decode("utf-8")
-        except (OSError, UnicodeDecodeError):
+            text = safeio.read_text(file)
+        except OSError:
             return None
     return _line_span(SourceFile(file, text), line, col)
 

@@ -143,8 +143,8 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict, target: st
         return Outcome(design_path, scenario_path, False, 0.0, message="the design has errors (run `rcsc check`)", diags=checked.diags)
     diags = Diagnostics()
     try:
-        text = safeio.read_input(scenario_path).decode("utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
+        text = safeio.read_text(scenario_path)
+    except OSError as exc:
         return Outcome(design_path, scenario_path, False, 0.0, message=f"cannot read the scenario: {exc}")
     sc = text_to_scenario(SourceFile(scenario_path, text), checked.model, diags)
     if sc is None:
