@@ -115,25 +115,29 @@ Two declarations in the same scope have the same name. Every type, constant,
 Global Memory variable, function, controller, CPU, verb, local, status field
 and rule label must be unique in its scope.
 """),
-    ("W0101", _W, "a status field named like a built-in status", """
-A status field is there to be read: by the supervisor (`SUB.name`), by
-scenarios (`NAME.name`) and by the console. A few names already mean
-something there. A supervisor reads `SUB.done`, `SUB.error`, `SUB.executing`,
+    ("W0101", _W, "a status field or value named like a built-in status", """
+A status field, and an extra status value of `reports`, are there to be read:
+by the supervisor (`SUB.name`), by scenarios (`NAME.name`) and by the
+console. A few names already mean something there. A supervisor reads `SUB.done`, `SUB.error`, `SUB.executing`,
 `SUB.error_code` and `SUB.age` as the built-in view of the subordinate; a
 scenario reads `NAME.echo`, `NAME.status`, `NAME.state`, `NAME.rule` and
 `NAME.verb` as the controller's status block. A status field with one of these
-names still holds its value, and the generated code keeps it, but those
-readers never see it: they read the built-in. The field is reported so that
+names still holds its value (and a status value is still reported), and the
+generated code keeps it, but those readers never see it: they read the
+built-in, so a supervisor that waits on `SUB.done` after `report done` waits
+for the plan to finish instead. The field is reported so that
 the mistake shows where it is made, not later as a supervisor that waits on
 the wrong `done`.
 
 Wrong:
 
     status done: bool = false          // SUB.done is the built-in
+    reports done                       // so is this one
 
 Fixed:
 
     status homed: bool = false         // SUB.homed is this field
+    reports AT_GOAL                    // SUB.AT_GOAL is this value
 """),
     ("E0102", _E, "unknown type", """
 A type name is neither a built-in type (bool, i32, i64, u32, f64, duration) nor

@@ -344,6 +344,7 @@ class _Sema:
                 if ident.name in c.statuses or ident.name in ("DONE", "EXEC", "ERROR", "UNINITIALIZED"):
                     self.d.add("E0101", ident.span, f"status value `{ident.name}` is defined more than once", "repeated status value")
                     continue
+                self._shadowed_status(name, ident, "status value")
                 c.statuses[ident.name] = number
                 c.status_spans[ident.name] = ident.span
                 number += 1
@@ -357,11 +358,8 @@ class _Sema:
             if n in c.status_fields or n in c.locals:
                 self.d.add("E0101", decl.name.span, f"`{n}` is defined more than once in `{name}`", f"repeated {what}")
                 continue
-            if table is c.status_fields and n in _BUILT_IN_VIEW:
-                who, what = _BUILT_IN_VIEW[n]
-                self.d.add("W0101", decl.name.span, f"status field `{n}` cannot be read by {who}", "named like a built-in status").with_note(
-                    f"`{name}.{n}` reads {what}, not this field"
-                ).with_help(f"give the field a name of its own, such as `{n}_value`")
+            if table is c.status_fields:
+                self._shadowed_status(name, decl.name, "status field")
             t = self.type_ref(decl.type)
             var = m.Var(n, t, decl.span, range=self.range_of(decl.type, t, checker), doc=_doc(decl))
             if not isinstance(t, ErrorType):
@@ -371,6 +369,17 @@ class _Sema:
                     self.check_in_range(value.value, var.range, decl.init.span, t)
             table[n] = var
         return c
+
+    def _shadowed_status(self, controller: str, ident: ast.Ident, what: str) -> None:
+        """W0101 for a status field or an extra status value that its readers
+        cannot see: `SUB.done` is the built-in, whatever `SUB` declares."""
+        if ident.name not in _BUILT_IN_VIEW:
+            return
+        who, means = _BUILT_IN_VIEW[ident.name]
+        self.d.add("W0101", ident.span, f"{what} `{ident.name}` cannot be read by {who}", "named like a built-in status").with_note(
+            f"`{controller}.{ident.name}` reads {means}, not this {what}"
+        ).with_help(f"give it a name of its own, such as `{ident.name}_value`" if what == "status field"
+                    else f"give it a name of its own, such as `{ident.name.upper()}`")
 
     def _single(self, values, item: ast.Controller, what: str, get, span_of):
         if not values and item.placeholder:  # an instance that could not be made: reported
