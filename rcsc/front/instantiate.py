@@ -140,6 +140,40 @@ def _gm_path(e: ast.Expr) -> list[ast.Ident] | None:
     return None
 
 
+def _memory_read(value: ast.Expr, gm: set[str]) -> ast.Name | None:
+    """The first name of a Global Memory variable in a value parameter's argument."""
+    if isinstance(value, ast.Name):
+        return value if value.name in gm else None
+    for f in dataclasses.fields(value):
+        if f.name == "span":
+            continue
+        x = getattr(value, f.name)
+        for y in x if isinstance(x, list) else [x]:
+            if isinstance(y, ast.Arg):
+                y = y.value
+            if isinstance(y, ast.Expr):
+                found = _memory_read(y, gm)
+                if found is not None:
+                    return found
+    return None
+
+
+def _memory_argument(p: ast.Param, value: ast.Expr, gm: set[str], what: str, diags: Diagnostics) -> bool:
+    """E0204 for a value parameter given a Global Memory variable: a value
+    parameter is a constant of the instance.  Reported once, here, instead of
+    as a read the body does not declare and again as a non-constant."""
+    name = _memory_read(value, gm)
+    if name is None:
+        return False
+    diag = diags.add("E0204", name.span, f"`{name.name}` is a Global Memory variable: value parameter `{p.name.name}` of {what} takes a constant",
+                     "a variable").with_label(p.name.span, "a value parameter")
+    if what.startswith("controller type"):
+        diag.with_help(f"to give each instance a variable, declare `{p.name.name}: gm` and read it with `reads {p.name.name}` in the type")
+    else:
+        diag.with_help(f"to pass a variable on every step, declare `{p.name.name}` as an `input` of the block and give it in the call")
+    return True
+
+
 def _has_int_literal(x) -> bool:
     if isinstance(x, ast.IntLit):
         return True
@@ -228,6 +262,7 @@ def expand(files, diags: Diagnostics) -> list[list[ast.Node]]:
     ctypes: dict[str, ast.ControllerType] = {}
     btypes: dict[str, ast.BlockType] = {}
     broken: set[str] = set()  # types with repeated parameters: reported once, not instantiated
+    gm: set[str] = set()  # Global Memory names (a value parameter given one is E0204)
     for f in files:
         if f.tree is None:
             continue
@@ -236,6 +271,8 @@ def expand(files, diags: Diagnostics) -> list[list[ast.Node]]:
                 ctypes.setdefault(item.name.name, item)
             elif isinstance(item, ast.BlockType):
                 btypes.setdefault(item.name.name, item)
+            elif isinstance(item, ast.GmVar):
+                gm.add(item.name.name)
     used: set[str] = set()
     for t in [*ctypes.values(), *btypes.values()]:
         seen: set[str] = set()
@@ -255,15 +292,15 @@ def expand(files, diags: Diagnostics) -> list[list[ast.Node]]:
             continue
         for item in f.tree.items:
             if isinstance(item, ast.ControllerInstance):
-                ctrl = None if item.type_name.name in broken else _instantiate(item, ctypes, used, diags)
+                ctrl = None if item.type_name.name in broken else _instantiate(item, ctypes, used, diags, gm)
                 if ctrl is None:
                     items.append(_placeholder(item))
                     continue
-                _lower_blocks(ctrl, btypes, used, diags, broken)
+                _lower_blocks(ctrl, btypes, used, diags, broken, gm)
                 items.append(ctrl)
             elif isinstance(item, ast.Controller) and item.blocks:
                 ctrl = _Copier(None, None).copy(item)  # the tree stays what was written
-                _lower_blocks(ctrl, btypes, used, diags, broken)
+                _lower_blocks(ctrl, btypes, used, diags, broken, gm)
                 items.append(ctrl)
             else:
                 items.append(item)
@@ -286,7 +323,8 @@ def _placeholder(item: ast.ControllerInstance) -> ast.Controller:
     return ctrl
 
 
-def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerType], used: set[str], diags: Diagnostics) -> ast.Controller | None:
+def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerType], used: set[str], diags: Diagnostics,
+                 gm: set[str]) -> ast.Controller | None:
     t = ctypes.get(item.type_name.name)
     if t is None:
         diag = diags.add("E0260", item.type_name.span, f"no controller type named `{item.type_name.name}`", "unknown controller type")
@@ -310,6 +348,8 @@ def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerT
                 ok = False
                 continue
             gms[p.name.name] = path
+        elif _memory_argument(p, arg.value, gm, what, diags):
+            ok = False
         else:
             values[p.name.name] = _typed(arg.value, p.type)
     if not ok:
@@ -383,7 +423,8 @@ class _StepCopier(_Copier):
         return new
 
 
-def _lower_blocks(ctrl: ast.Controller, btypes: dict[str, ast.BlockType], used: set[str], diags: Diagnostics, broken: set[str]) -> None:
+def _lower_blocks(ctrl: ast.Controller, btypes: dict[str, ast.BlockType], used: set[str], diags: Diagnostics, broken: set[str],
+                 gm: set[str]) -> None:
     insts: dict[str, _Inst] = {}
     taken = {d.name.name for d in ctrl.status_fields + ctrl.locals}
     for use in ctrl.blocks:
@@ -403,6 +444,9 @@ def _lower_blocks(ctrl: ast.Controller, btypes: dict[str, ast.BlockType], used: 
             continue
         args = _bind(t.params, use.args, f"block `{t.name.name}`", use.type_name, diags)
         if args is None:
+            continue
+        memory = [_memory_argument(p, args[p.name.name].value, gm, f"block `{t.name.name}`", diags) for p in t.params if p.name.name in args]
+        if any(memory):
             continue
         if not t.steps:
             diags.add("E0265", t.name.span, f"block `{t.name.name}` has no `step`", "no step").with_help("add `step { NAME = EXPR; }`")
@@ -528,6 +572,8 @@ class _UseCopier(_Copier):
                 diag.with_note("outputs: " + (", ".join(f"`{o}`" for o in outs) or "none"))
                 return node  # as written: not copied further (one finding)
             return ast.Name(node.span, inst.mangled(mb.name.name))
+        if isinstance(node.obj, ast.Name) and node.obj.name in self.blocks:
+            return node  # an instance that could not be made (reported): its outputs are unknown, not a second finding
         return None
 
     def assign(self, node):
