@@ -250,6 +250,12 @@ def _cli_overrides(args: argparse.Namespace):
         return [v.strip() for v in value.split(",") if v.strip()]
 
     select, ignore = split(args.select), split(args.ignore)
+    # `--select` chooses the warnings to report (errors are always reported):
+    # one that names no warning would silently hide them all.
+    if select is not None and not select:
+        raise UsageError("--select: no code given (to report no warnings, use --ignore W)")
+    if select and all(v.upper().startswith("E") for v in select):
+        raise UsageError(f"--select: `{args.select}` names no warning (errors are always reported; --select chooses warnings, e.g. W05)")
     severity: dict = {}
     for item in args.severity:
         code, _, level = item.partition("=")

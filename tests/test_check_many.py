@@ -282,3 +282,14 @@ def test_junit_reports_a_design_error_as_error_with_its_diagnostic(tmp_path, mon
     assert error is not None and root.find("./testsuite/testcase/failure") is None
     assert error.get("message") == "./d.rcs:3:17: error[E0100]: cannot find `nope` in this scope"
     assert "the design has errors" in error.text and "error[E0100]" in error.text
+
+
+def test_a_select_that_names_no_warning_is_a_usage_error(tmp_path, monkeypatch, capsys) -> None:
+    """`--select` chooses warnings; one that names none (empty, commas, only
+    error codes) would hide every warning without a word."""
+    _tree(tmp_path, monkeypatch)
+    for value in ("", ",,,", "E0101", "e01, E"):
+        rc, lines, err = _short(["proj/b.rcs", "--select", value], capsys)
+        assert rc == 2 and lines == [] and err.startswith("error: --select: "), (value, err)
+    rc, lines, err = _short(["proj/b.rcs", "--select", "W04,E01"], capsys)
+    assert rc == 0 and err == ""
