@@ -1100,6 +1100,8 @@ A name that CTRL does not have is almost always a typo.
     ("E0704", _E, "missing or repeated scenario setting", """
 A scenario says exactly once how many cycles it runs: `cycles 200`. Without it
 the run has no end; with two `cycles` lines it is ambiguous which one counts.
+Likewise a scenario has at most one `scenario "NAME"` line: the name shown in
+reports and JUnit files.
 """),
     ("E0705", _E, "fault injection names no CPU or controller", """
 `at N: stop CPU` stops a CPU (it runs no more cycles) and `at N: freeze CTRL`

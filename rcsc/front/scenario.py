@@ -277,10 +277,14 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
     name = source.path.rsplit("/", 1)[-1].removesuffix(".scn")
     cycles: int | None = None
     cycles_span: Span | None = None
+    named: Span | None = None
     sc = Scenario(name, source.path, 0)
     for item in items:
         kind = item[0]
         if kind == "name":
+            if named is not None:
+                diags.add("E0704", item[1], "the scenario is named more than once", "repeated").with_label(named, "first named here")
+            named = item[1]
             sc.name = item[2]
         elif kind == "cycles":
             if cycles is not None:

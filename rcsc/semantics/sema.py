@@ -219,6 +219,7 @@ class _Sema:
         # Function signatures first: constants may call pure functions.  A
         # parameter range that needs a constant resolves it lazily.
         const_checker = Checker(Scope(self.g, const_only=True), self.d)
+        self.g.variables = {name: "a Global Memory variable" for name, item in self.decls.items() if isinstance(item, ast.GmVar)}
         for name, item in self.decls.items():
             if isinstance(item, ast.Const):
                 self.const_ast[name] = item
@@ -348,6 +349,9 @@ class _Sema:
                 c.statuses[ident.name] = number
                 c.status_spans[ident.name] = ident.span
                 number += 1
+        design_variables = self.g.variables
+        self.g.variables = design_variables | {d.name.name: f"a local of `{name}`" for d in item.locals} | {
+            d.name.name: f"a status field of `{name}`" for d in item.status_fields}
         for decl, table, what in [(d, c.status_fields, "status field") for d in item.status_fields] + [
             (d, c.locals, "local") for d in item.locals
         ]:
@@ -368,6 +372,7 @@ class _Sema:
                     var.init = value.value
                     self.check_in_range(value.value, var.range, decl.init.span, t)
             table[n] = var
+        self.g.variables = design_variables
         return c
 
     def _shadowed_status(self, controller: str, ident: ast.Ident, what: str) -> None:

@@ -69,6 +69,11 @@ class Globals:
     # (an unknown subordinate, an unknown GM variable in `reads`): later uses
     # stay quiet so that one mistake gives one finding.
     poisoned: set[str] = field(default_factory=set)
+    # Names of variables declared but not yet modelled while constants are
+    # evaluated (all Global Memory; the locals and status fields of the
+    # controller whose header is being read): a constant expression that
+    # names one reads a variable (E0204), it does not name something unknown.
+    variables: dict[str, str] = field(default_factory=dict)  # name -> what it is
 
 
 @dataclass
@@ -420,11 +425,18 @@ class Checker:
     def _unknown_name(self, node: ast.Node, n: str) -> m.Expr:
         if n in self.g.poisoned:
             return m.Const(node.span, ERROR, 0)
-        diag = self.d.add("E0100", node.span, f"cannot find `{n}` in this scope", "not found")
         s = self.s
-        if s.const_only and (n in self.g.gm or (s.controller and (n in s.controller.locals or n in s.controller.status_fields))):
-            diag.with_note("a constant expression cannot read variables")
-        elif n in self.g.types and isinstance(self.g.types[n], EnumType):
+        if s.const_only and (n in self.g.gm or n in self.g.variables
+                             or (s.controller and (n in s.controller.locals or n in s.controller.status_fields))):
+            # The name is known: what is wrong is reading a variable where a
+            # value must be known before the design runs.
+            what = "a Global Memory variable" if n in self.g.gm else self.g.variables.get(n, "a variable of the controller")
+            self.d.add("E0204", node.span, f"`{n}` is {what}: a constant expression cannot read it", "a variable").with_note(
+                "constants, initial values, ranges and scenario values are known before the design runs: "
+                "literals, constants, enum members and arithmetic on them")
+            return m.Const(node.span, ERROR, 0)
+        diag = self.d.add("E0100", node.span, f"cannot find `{n}` in this scope", "not found")
+        if n in self.g.types and isinstance(self.g.types[n], EnumType):
             diag.with_help(f"name a member: `{n}.{self.g.types[n].members[0] if self.g.types[n].members else 'MEMBER'}`")
         elif n in self.g.controllers:
             diag.with_help(f"read a subordinate's status with `{n}.done`, `{n}.error`, ...")
