@@ -72,6 +72,22 @@ def test_a_planted_symlink_is_refused_and_its_target_untouched(tmp_path: Path, c
     assert sorted(p.name for p in out.iterdir()) == ["submarine.h"]
 
 
+def test_a_persons_externs_file_linked_into_the_build_is_kept(tmp_path: Path, capsys) -> None:
+    """The externs file is the person's (written only when missing); kept
+    in another folder and linked in, it is kept as it is, not refused."""
+    design = ROOT / "tests" / "mc" / "extern_cpu.rcs"
+    mine = tmp_path / "mine" / "extern_cpu_externs.c"
+    mine.parent.mkdir()
+    mine.write_text("/* my externs */\n")
+    out = tmp_path / "out"
+    out.mkdir()
+    os.symlink(mine, out / "extern_cpu_externs.c")
+    assert main(["build", str(design), "--target", "c", "-o", str(out)]) == 0, capsys.readouterr().err
+    assert os.path.islink(out / "extern_cpu_externs.c") and mine.read_text() == "/* my externs */\n"
+    assert (out / "Makefile").exists()
+    capsys.readouterr()
+
+
 def test_a_symlinked_subfolder_is_refused(tmp_path: Path, capsys) -> None:
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()

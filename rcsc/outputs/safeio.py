@@ -286,7 +286,11 @@ def write_tree(files: list[TreeFile], out_dir: str, is_ours: Callable[[str], boo
                 plan.append((f, path))
                 continue
             st = os.lstat(path)
-            if not stat.S_ISREG(st.st_mode):
+            if f.user and stat.S_ISLNK(st.st_mode):
+                # A person's own file (an extern's code) kept elsewhere and
+                # linked in: it is theirs, and rcsc writes it only when missing.
+                res.kept.append(f.path)
+            elif not stat.S_ISREG(st.st_mode):
                 res.refused.append(f"{f.path}: it is a {'symbolic link' if stat.S_ISLNK(st.st_mode) else 'special file or folder'}")
             elif f.user:
                 res.kept.append(f.path)
