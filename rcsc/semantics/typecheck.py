@@ -169,6 +169,7 @@ class Checker:
         self.s = scope
         self.g = scope.g
         self.d = diags
+        self._wrapped: dict[int, m.Const] = {}  # folded constants that wrapped (W0525 once, where it happened)
 
     # ---- helpers -------------------------------------------------------------
 
@@ -190,7 +191,44 @@ class Checker:
             return e
         except (TypeError, KeyError, ValueError, ArithmeticError, RecursionError):
             return e
-        return m.Const(e.span, e.type, value)
+        folded = m.Const(e.span, e.type, value)
+        if self._certain_wrap(e, value):
+            self._wrapped[id(folded)] = folded  # kept alive, so its id is not reused
+        return folded
+
+    def _certain_wrap(self, e: m.Expr, value) -> bool:
+        """W0525 for integer arithmetic of constants that wraps or divides by
+        zero: folded here, the value analysis never sees it, and the mistake
+        is certain, not only possible (`2147483647 + 1` in a job)."""
+        t = I64 if e.type == DURATION else e.type
+        if not isinstance(t, IntType):
+            return False
+        if isinstance(e, m.Binary) and e.op in ("+", "-", "*", "/", "%"):
+            if not (isinstance(e.left, m.Const) and isinstance(e.right, m.Const)):
+                return False
+            if id(e.left) in self._wrapped or id(e.right) in self._wrapped:
+                return True  # reported where it first wrapped
+            a, b = e.left.value, e.right.value
+            if not (isinstance(a, int) and isinstance(b, int)):
+                return False
+            if e.op in ("/", "%") and b == 0:
+                self.d.add("W0525", e.span, f"division by zero in constant arithmetic: `{e.span.text}` is 0 by the language's rules",
+                           "divides by zero")
+                return True
+            exact = {"+": a + b, "-": a - b, "*": a * b}.get(e.op)
+            if e.op == "/":
+                exact = abs(a) // abs(b) * (1 if (a < 0) == (b < 0) else -1)
+        elif isinstance(e, m.Unary) and e.op == "-" and isinstance(e.operand, m.Const) and isinstance(e.operand.value, int):
+            if id(e.operand) in self._wrapped:
+                return True
+            exact = -e.operand.value
+        else:
+            return False
+        if exact is None or exact == value:
+            return False
+        self.d.add("W0525", e.span, f"constant arithmetic overflows `{e.type}`: `{e.span.text}` is {exact}, which wraps to {value}",
+                   "wraps around").with_help(f"use a wider type, or a value that fits {t.min}..{t.max}")
+        return True
 
     def expect(self, node: ast.Expr, expected: Type, what: str = "") -> m.Expr:
         e = self.expr(node, expected)
