@@ -89,7 +89,7 @@ def check(design: Design, diags: Diagnostics) -> None:
                 unit, steps = base, "base ticks"
             if ns % unit:
                 cycles = -(-ns // unit)
-                diags.add("W0601", span, f"{fmt_ns(ns)} is not a whole number of {fmt_ns(unit)} {steps}", f"rounds up to {cycles} {steps}").with_help(
+                diags.add("W0601", span, f"{fmt_ns(ns)} is not a whole number of {fmt_ns(unit)} {steps}", f"rounds up to {cycles} {steps if cycles != 1 else steps[:-1]}").with_help(
                     f"write `{fmt_ns(cycles * unit)}` to say what happens"
                 )
 

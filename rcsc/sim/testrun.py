@@ -37,22 +37,60 @@ def is_design_file(path: str) -> bool:
     return bool(_DESIGN_HEADER.match(head))
 
 
+def _stem(path: str) -> str:
+    return os.path.basename(path).rsplit(".", 1)[0]
+
+
+def _claims(design: str, scenario: str) -> bool:
+    """Whether a design's name claims a scenario in a folder shared by
+    several designs: `relay.rcs` claims `relay.scn` and `relay_stop.scn`."""
+    d, s = _stem(design), _stem(scenario)
+    return s == d or s.startswith(d + "_") or s.startswith(d + "-")
+
+
+def _owner(designs: list[str], scenario: str) -> str | None:
+    """The design of `designs` (all in one folder) that a scenario beside
+    them belongs to: the only one, or among several the one whose name
+    starts the scenario's name (the longest such name)."""
+    if len(designs) == 1:
+        return designs[0]
+    claiming = [d for d in designs if _claims(d, scenario)]
+    return max(claiming, key=lambda d: len(_stem(d))) if claiming else None
+
+
+def _designs_in(folder: str) -> list[str]:
+    return [os.path.join(folder, f) for f in sorted(os.listdir(folder)) if is_design_file(os.path.join(folder, f))]
+
+
 def scenarios_of(design_path: str) -> list[str]:
+    """The scenarios of a design: `*.scn` beside it or in `scenarios/` next
+    to it; in a folder with several designs, those its name claims
+    (`relay_stop.scn` is `relay.rcs`'s)."""
     folder = os.path.dirname(design_path) or "."
+    designs = [design_path]
+    if os.path.isdir(folder):
+        others = [d for d in _designs_in(folder) if os.path.basename(d) != os.path.basename(design_path)]
+        designs += others
     found = []
     for where in (folder, os.path.join(folder, "scenarios")):
         if os.path.isdir(where):
             found += [os.path.join(where, f) for f in sorted(os.listdir(where)) if f.endswith(".scn")]
-    return found
+    return [s for s in found if _owner(designs, s) is designs[0]]
 
 
 def design_of(scenario_path: str) -> str | None:
-    """The design a scenario belongs to: the one design file in its folder or the folder above."""
+    """The design a scenario belongs to: the one design file in its folder or
+    the folder above, or among several there the one whose name starts the
+    scenario's name."""
     folder = os.path.dirname(scenario_path) or "."
     for where in (folder, os.path.dirname(os.path.abspath(folder))):
-        designs = [os.path.join(where, f) for f in sorted(os.listdir(where)) if is_design_file(os.path.join(where, f))]
-        if len(designs) == 1:
-            return designs[0] if where == folder else os.path.relpath(designs[0])
+        designs = _designs_in(where)
+        if not designs:
+            continue
+        owner = _owner(designs, scenario_path)
+        if owner is not None:
+            return owner if where == folder else os.path.relpath(owner)
+        return None
     return None
 
 
@@ -64,14 +102,23 @@ def discover(paths: list[str]) -> tuple[list[tuple[str, list[str]]], list[str]]:
         if os.path.isdir(p):
             for root, dirs, files in os.walk(p):
                 dirs[:] = sorted(d for d in dirs if not d.startswith(".") and d not in ("__pycache__", "node_modules"))
-                for f in sorted(files):
-                    full = os.path.join(root, f)
-                    if is_design_file(full):
-                        plan.setdefault(full, []).extend(scenarios_of(full))
+                claimed: set[str] = set()
+                designs = [os.path.join(root, f) for f in sorted(files) if is_design_file(os.path.join(root, f))]
+                for full in designs:
+                    mine = scenarios_of(full)
+                    plan.setdefault(full, []).extend(mine)
+                    claimed.update(mine)
+                if len(designs) > 1:  # with one design every scenario beside it is its own
+                    for where in (root, os.path.join(root, "scenarios")):
+                        if os.path.isdir(where):
+                            problems += [f"{os.path.join(where, f)}: no design beside it is named like `{_stem(f)}` "
+                                         "(`NAME.rcs` owns `NAME.scn` and `NAME_*.scn`)"
+                                         for f in sorted(os.listdir(where)) if f.endswith(".scn") and os.path.join(where, f) not in claimed]
         elif p.endswith(".scn") and os.path.isfile(p):
             d = design_of(p)
             if d is None:
-                problems.append(f"{p}: no single design file beside it or in the folder above")
+                problems.append(f"{p}: no design for it: no design file beside it or in the folder above, "
+                                f"or several and none named like `{_stem(p)}` (`NAME.rcs` owns `NAME.scn` and `NAME_*.scn`)")
             else:
                 plan.setdefault(d, []).append(p)
         elif os.path.isfile(p):
