@@ -201,3 +201,15 @@ def test_fmt_refuses_read_only_files_and_hard_links_and_counts_only_what_it_wrot
     assert ok.read_text() == "design d\nconst X: i32 = 1\n"
     assert cli.main(["fmt", "--check", str(ro)]) == 1  # reading is fine
     capsys.readouterr()
+
+
+def test_a_name_plan_at_the_start_of_a_line_is_not_a_plan(monkeypatch, capsys) -> None:
+    """`plan` is a keyword only where a plan is declared: a constant named
+    `plan` continuing an expression made the next block (a record) a state
+    table, and the indentation after it went wrong."""
+    text = ("design p\nconst plan: i32 = 1\nconst B: i32 = 2 +\n    plan\nrecord XY {\n    x: f64,\n    y: f64,\n}\n"
+            "gm pos: XY = XY(x = 0.0, y = 0.0)\nsimulator P level 0 budget 1 us {\n    writes pos\n    post {\n"
+            "        pos = XY(x = pos.x + 1.0, y = pos.y);\n    }\n}\ncpu M {\n    heartbeat 10 ms\n    schedule P\n}\n")
+    monkeypatch.setattr("sys.stdin", _Stdin(text.encode()))
+    assert cli.main(["fmt", "-"]) == 0
+    assert capsys.readouterr().out == text

@@ -29,7 +29,9 @@ from dataclasses import dataclass
 INDENT = 4
 
 _RULE_START = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\s*:(?!:)")
-_PLAN_HEAD = re.compile(r"\s*plan\b")
+# `plan NAME` inside a controller: a line that only starts with the word (a
+# constant named `plan` continuing an expression at the top level) is not one.
+_PLAN_HEAD = re.compile(r"\s*plan\s+[A-Za-z_]")
 
 
 def _code_mask(text: str) -> list[bool]:
@@ -133,7 +135,7 @@ def format_text(text: str) -> str:
             i = j
             continue
         out.append(indent + stripped if line.ends_in_comment else (indent + stripped).rstrip())
-        if _PLAN_HEAD.match(code):
+        if depth >= 1 and _PLAN_HEAD.match(code):
             pending_plan = True
         for ch in code:
             if ch == "{":
