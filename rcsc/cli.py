@@ -219,8 +219,9 @@ def _add_check_arguments(p: argparse.ArgumentParser) -> None:
     _add_report_arguments(p)
     p.add_argument("-q", "--quiet", action="store_true", help="print the findings only: no summary line, no notes")
     g = p.add_argument_group("configuration (docs/configuration.md)")
-    g.add_argument("--config", metavar="FILE", help="use this rcsc.toml or pyproject.toml instead of searching for one")
-    g.add_argument("--no-config", action="store_true", help="ignore every configuration file")
+    which = g.add_mutually_exclusive_group()
+    which.add_argument("--config", metavar="FILE", help="use this rcsc.toml or pyproject.toml instead of searching for one")
+    which.add_argument("--no-config", action="store_true", help="ignore every configuration file")
     g.add_argument("--select", metavar="CODES", help="report only these warnings (comma-separated codes or prefixes)")
     g.add_argument("--ignore", metavar="CODES", help="never report these warnings (comma-separated codes or prefixes)")
     g.add_argument(
@@ -790,6 +791,8 @@ def _add_doc_arguments(p: argparse.ArgumentParser) -> None:
 def _run_doc(args: argparse.Namespace) -> int:
     from rcsc.outputs import doc, graph
 
+    if os.path.exists(args.output) and not os.path.isdir(args.output):
+        raise UsageError(f"`{args.output}` exists and is not a folder (rcsc doc writes index.html into a folder)")
     result = _check(args.path)
     if result.model is None:
         _report_to_stderr(result.diags)

@@ -111,7 +111,8 @@ def find(start: str) -> tuple[str, bool] | None:
 def _has_tool_table(path: str) -> bool:
     try:
         with open(path, encoding="utf-8") as f:
-            return any(line.strip().replace(" ", "").startswith("[tool.rcsc") for line in f)
+            # `[[tool.rcsc]]` too: an array of tables, reported (E0009) rather than ignored.
+            return any(line.strip().replace(" ", "").lstrip("[").startswith("tool.rcsc") for line in f)
     except (OSError, UnicodeDecodeError):
         return False
 

@@ -71,11 +71,12 @@ CASES = [
 @pytest.fixture(scope="module")
 def folded(tmp_path_factory) -> dict:
     folder = tmp_path_factory.mktemp("std")
-    lines = ["design stdlib_values", "import std.math"]
+    # A module checked on its own: declarations only (a design would need a CPU, E0605).
+    lines = ["module stdlib_values", "import std.math"]
     for i, (expr, t, _) in enumerate(CASES):
         lines.append(f"const C{i}: {t} = {expr}")
     (folder / "d.rcs").write_text("\n".join(lines) + "\n")
-    result = check_path(str(folder / "d.rcs"))
+    result = check_path(str(folder / "d.rcs"), as_module=True)
     assert not result.diags.items, [(d.code, d.message) for d in result.diags]
     return {name: c.value for name, c in result.model.consts.items()}
 
