@@ -128,7 +128,57 @@ def prepare(case: Case, base: Path) -> Prepared:
         p.reference = run_to_jsonl(result.model, run).encode("utf-8")
     except Exception as exc:  # a crash of the simulator is a finding, not the end of the run
         p.findings.append(Finding(case.seed, "crash", "rcsc sim", f"{type(exc).__name__}: {exc}"))
+        return p
+    p.findings += observed_from_trace(case.seed, model, sc, run, p.reference)
     return p
+
+
+def observed_from_trace(seed: int, model, sc, run, trace: bytes) -> list[Finding]:
+    """`rcsc test --target T` evaluates expectations on what it rebuilds
+    from the program's trace (rcsc.sim.compiled); the simulator on what it
+    observed.  The compiled traces equal the simulator's (compared below),
+    so rebuilding from the simulator's own trace must give, tick by tick,
+    what the simulator observed: Global Memory, every status, every field,
+    negative zeros and NaNs included (several CPUs: each buffer as its
+    writer's latest released cycle left it)."""
+    from rcsc.sim import compiled
+
+    try:
+        rebuilt = compiled.snapshots(model, sc, compiled.read_trace(trace.decode("utf-8")), run.multi_cpu)
+    except Exception as exc:  # an unreadable trace is a finding too
+        return [Finding(seed, "crash", "rcsc test --target (trace)", f"{type(exc).__name__}: {exc}")]
+    for want, got in zip(run.snapshots, rebuilt):
+        a, b = _observed(want), _observed(got)
+        if a != b:
+            diff = next(f"{k}: sim {a[k]!r}, from the trace {b.get(k)!r}" for k in a if a[k] != b.get(k))
+            return [Finding(seed, "disagree", "rcsc test --target (what expectations see)", f"tick {want.cycle}: {diff}")]
+    if len(run.snapshots) != len(rebuilt):
+        return [Finding(seed, "disagree", "rcsc test --target (what expectations see)",
+                        f"{len(run.snapshots)} ticks observed, {len(rebuilt)} rebuilt")]
+    return []
+
+
+def _observed(snap) -> dict:
+    """A snapshot as comparable values: floats by their bits (so -0.0 and NaN count)."""
+    import struct
+
+    def norm(v):
+        if isinstance(v, bool):
+            return v
+        if isinstance(v, float):
+            return ("f64", struct.pack(">d", v).hex()) if v == v else ("f64", "nan")
+        if isinstance(v, dict):
+            return {k: norm(x) for k, x in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [norm(x) for x in v]
+        return v
+
+    out = {f"gm.{k}": norm(v) for k, v in snap.gm.items()}
+    for name, c in snap.ctrl.items():
+        for attr in ("echo", "status", "verb", "state", "rule", "error_code"):
+            out[f"{name}.{attr}"] = getattr(c, attr)
+        out.update({f"{name}.{k}": norm(v) for k, v in c.fields.items()})
+    return out
 
 
 def first_difference(ref: bytes, got: bytes) -> str:

@@ -63,7 +63,7 @@ def _emit_report(text: str, output: str | None) -> None:
         _write(sys.stdout, text)
         return
     try:
-        safeio.write_file(output, text.encode("utf-8"))
+        safeio.write_report(output, text.encode("utf-8"))
     except OSError as exc:
         raise UsageError(f"cannot write `{output}`: {exc.strerror or exc}") from exc
 
@@ -771,7 +771,7 @@ def _run_graph(args: argparse.Namespace) -> int:
         sys.stdout.buffer.write(data)
     else:
         try:
-            safeio.write_file(args.output, data)
+            safeio.write_report(args.output, data)
         except OSError as exc:
             raise UsageError(f"cannot write `{args.output}`: {exc.strerror or exc}") from exc
     if result.diags.items:

@@ -123,6 +123,8 @@ def test_generator_covers_the_language() -> None:
         "NaN scalar value": r"^gm \w+: f64 = \(-?\(?0\.0 / 0\.0",
         "doc comment closing a C comment": r"^\s*/// .*\*/", "doc comment ending in a backslash": r"^\s*/// .*\\$",
         "heartbeat in other units": r"heartbeat (\d+ us|2 ms|1 s)$", "long array": r"; (17|64|300)\]",
+        "array value parameter of a type": r"^(controller|simulator) type Ty\d+\(.*\bka\d+: \[",
+        "array value parameter of a block": r"^block ACC\d+\(g: f64, w: \[u32; 2\]\)",
     }
     missing = [k for k, pat in wanted.items() if not re.search(pat, text, re.M)]
     assert missing == []

@@ -200,7 +200,7 @@ def test_cli_doc(tmp_path: Path, capsys) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("x", encoding="utf-8")
     assert cli.main(["doc", str(EXAMPLES["submarine"]), "-o", str(blocker)]) == 2
-    assert "cannot write to" in capsys.readouterr().err
+    assert f"`{blocker}` exists and is not a folder" in capsys.readouterr().err
 
 
 def test_template_ships_in_the_package() -> None:

@@ -174,8 +174,6 @@ def write_file(
     replaced atomically.
     """
     directory = os.path.dirname(path) or "."
-    if may_replace is None:
-        _refuse_seen(path)
     if os.path.lexists(path):
         st = os.lstat(path)
         if may_replace is not None:
@@ -190,7 +188,6 @@ def write_file(
             # replace the device or the link itself.
             with open(path, "wb") as out:
                 out.write(data)
-            _note_report(path)
             return
     fd, tmp = tempfile.mkstemp(prefix=".rcsc-", suffix=".tmp", dir=directory)
     try:
@@ -201,8 +198,15 @@ def write_file(
     except BaseException:
         _unlink_quietly(tmp)
         raise
-    if may_replace is None:
-        _note_report(path)
+
+
+def write_report(path: str, data: bytes) -> None:
+    """Write a report to the file a person named (`-o`, `--step-log`,
+    `--junit`), as `write_file` does, unless this command read that file or
+    already wrote another report to it (`command_files`)."""
+    _refuse_seen(path)
+    write_file(path, data)
+    _note_report(path)
 
 
 def _note_report(path: str) -> None:

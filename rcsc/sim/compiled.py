@@ -98,6 +98,11 @@ def _trace_int(text: str):
     return -0.0 if text == "-0" else int(text)
 
 
+def read_trace(text: str) -> list[dict]:
+    """The lines of a program's JSON-lines trace (ValueError if one is not JSON)."""
+    return [json.loads(x, parse_int=_trace_int) for x in text.splitlines()]
+
+
 def _value(v, t: Type):
     """A trace value as the simulator holds it."""
     if isinstance(t, RecordType):
@@ -188,7 +193,7 @@ def run_compiled(design: m.Design, sc: Scenario, b: Build, work: Path) -> RunRes
     if r.returncode != 0:
         raise CompiledError(f"the program exited with status {r.returncode}:\n{r.stderr[-3000:]}")
     try:
-        lines = [json.loads(x, parse_int=_trace_int) for x in trace.read_text(encoding="utf-8").splitlines()]
+        lines = read_trace(trace.read_text(encoding="utf-8"))
         snaps = snapshots(design, sc, lines, b.multi)
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise CompiledError(f"the program's trace is unreadable: {exc}") from exc
