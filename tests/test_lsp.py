@@ -305,3 +305,84 @@ def test_a_document_whose_path_holds_a_nul_does_not_stop_the_others(client: Clie
     uri = _open(client, path, DESIGN.replace("speed > 2.0", "sped > 2.0"))
     assert any(d.get("code") == "E0100" for d in client.diagnostics(uri))
     assert client.close() == 0
+
+
+@pytest.mark.parametrize("odd", ["\x0c", "\u2028", "\x85", "\x0b", "\x1c"])
+def test_a_range_edit_after_a_character_python_counts_as_a_line_end(client: Client, tmp_path: Path, odd: str) -> None:
+    """LSP ends lines at \\n, \\r\\n and \\r only; Python's splitlines also at
+    a form feed, U+2028 and others.  A range edit after such a character
+    must land where the editor made it: the server's text stays the
+    editor's, its finding is where `rcsc check` puts it, and formatting
+    writes the edited text back, not a mangled one."""
+    text = DESIGN.replace("gm speed", f"// a{odd}b\ngm speed")
+    uri = _open(client, tmp_path / "d.rcs", text)
+    client.diagnostics(uri)
+    i = text.index("speed > 2.0")
+    start, end = _pos(text, "speed > 2.0"), _pos(text, "speed > 2.0", delta=5)
+    client.notify("textDocument/didChange", {"textDocument": {"uri": uri, "version": 2},
+                                             "contentChanges": [{"range": {"start": start, "end": end}, "text": "sped"}]})
+    found = [d for d in client.diagnostics(uri) if d.get("code") == "E0100"]
+    assert [d["range"]["start"] for d in found] == [start]
+    edits = client.request("textDocument/formatting", {"textDocument": {"uri": uri}, "options": {"tabSize": 4, "insertSpaces": True}})
+    new_text = edits[0]["newText"]
+    assert "E1: sped > 2.0" in new_text.replace("  ", " ") and "spedoal" not in new_text
+    assert client.close() == 0
+
+
+@pytest.mark.parametrize("end", ["\r", "\r\n"])
+def test_formatting_replaces_the_whole_document_whatever_its_line_ends(client: Client, tmp_path: Path, end: str) -> None:
+    """The edit's range must end at the end of the text by the protocol's
+    line rules: with lone CRs, an end at line 0 made the editor insert the
+    formatted design before the old one."""
+    messy = DESIGN.replace("E2: otherwise | S1 -> S1;", "E2:   otherwise|S1->S1;")
+    text = messy.replace("\n", end)
+    uri = _open(client, tmp_path / "d.rcs", text)
+    client.diagnostics(uri)
+    edits = client.request("textDocument/formatting", {"textDocument": {"uri": uri}, "options": {"tabSize": 4, "insertSpaces": True}})
+    assert len(edits) == 1
+    assert edits[0]["range"] == {"start": {"line": 0, "character": 0}, "end": {"line": messy.count("\n"), "character": 0}}
+    assert client.close() == 0
+
+
+def test_editing_an_open_module_rechecks_the_open_design_that_imports_it(client: Client, tmp_path: Path) -> None:
+    """The design's findings follow the module's unsaved text, and closing
+    the module unsaved brings the file's text back."""
+    (tmp_path / "lib").mkdir()
+    module = "module m\nconst K: f64 = 1.0\n"
+    (tmp_path / "lib" / "m.rcs").write_text(module)
+    design = DESIGN.replace("design lsp_demo\n", 'design lsp_demo\nimport "lib/m.rcs"\n').replace("speed > 2.0", "speed > K")
+    duri = _open(client, tmp_path / "d.rcs", design)
+    assert "E0100" not in [d.get("code") for d in client.diagnostics(duri)]
+    muri = _open(client, tmp_path / "lib" / "m.rcs", module)
+    client.diagnostics(muri)
+    client.notify("textDocument/didChange", {"textDocument": {"uri": muri, "version": 2},
+                                             "contentChanges": [{"text": "module m\nconst K2: f64 = 1.0\n"}]})
+    assert "E0100" in [d.get("code") for d in client.diagnostics(duri)]
+    client.notify("textDocument/didClose", {"textDocument": {"uri": muri}})
+    assert "E0100" not in [d.get("code") for d in client.diagnostics(duri)]
+    assert client.close() == 0
+
+
+def test_requests_for_documents_the_editor_did_not_open_answer_nothing(client: Client, tmp_path: Path) -> None:
+    """No file read from disk behind the editor's back, no traceback: an
+    empty answer (the server checks what the editor opened)."""
+    (tmp_path / "there.rcs").write_text(DESIGN)
+    for uri in (_uri(tmp_path / "there.rcs"), _uri(tmp_path / "missing.rcs"), "untitled:X"):
+        pos = {"line": 0, "character": 0}
+        assert client.request("textDocument/hover", {"textDocument": {"uri": uri}, "position": pos}) is None
+        assert client.request("textDocument/definition", {"textDocument": {"uri": uri}, "position": pos}) is None
+        assert client.request("textDocument/documentSymbol", {"textDocument": {"uri": uri}}) == []
+        assert client.request("textDocument/completion", {"textDocument": {"uri": uri}, "position": pos})["items"] == []
+        assert client.request("textDocument/formatting", {"textDocument": {"uri": uri}, "options": {"tabSize": 4, "insertSpaces": True}}) is None
+        client.notify("textDocument/didSave", {"textDocument": {"uri": uri}})
+    assert client.close() == 0
+    assert b"Traceback" not in client.proc.stderr.read()
+
+
+def test_the_configurations_own_findings_are_published_on_it(client: Client, tmp_path: Path) -> None:
+    (tmp_path / "rcsc.toml").write_text('ignore = ["W9999"]\n')
+    uri = _open(client, tmp_path / "d.rcs", DESIGN)
+    found = client.diagnostics(_uri(tmp_path / "rcsc.toml"))
+    assert [(d["code"], d["range"]["start"]) for d in found] == [("E0009", {"line": 0, "character": 10})]
+    client.diagnostics(uri)
+    assert client.close() == 0

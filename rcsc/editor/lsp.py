@@ -5,7 +5,10 @@ document it publishes the same findings as `rcsc check` (configuration
 included), from the editor's unsaved text: on open and save at once, while
 typing after a short pause (a newer edit cancels the pending check).  A
 module is checked through the design that imports it (found as `rcsc check`
-finds it), with the unsaved texts of every open document.
+finds it), with the unsaved texts of every open document; an edit of an open
+module checks again the open designs whose last check read it.  The
+configuration's own findings (E0009) are published on the configuration
+file.  Only documents the editor opened are checked or answered for.
 
 Requests: hover (a name's declaration, a verb's signature, the explanation
 of a diagnostic code under the cursor), go to definition (names, states,
@@ -21,10 +24,13 @@ from __future__ import annotations
 
 import asyncio
 import os
+import re
+from collections.abc import Sequence
 from urllib.parse import unquote, urlparse
 
 from lsprotocol import types as lsp
 from pygls.lsp.server import LanguageServer
+from pygls.workspace import TextDocument, Workspace
 
 import rcsc
 from rcsc import codes
@@ -61,6 +67,34 @@ _KIND = {
     "cpu": lsp.SymbolKind.Module,
     "state": lsp.SymbolKind.EnumMember,
 }
+
+
+# LSP ends a line at `\n`, `\r\n` or `\r` only (as rcsc does), where Python's
+# str.splitlines also ends one at a form feed, U+2028, U+0085 and others.
+_LSP_LINE = re.compile(r"[^\r\n]*(?:\r\n|\r|\n)|[^\r\n]+\Z")
+
+
+def lsp_lines(text: str) -> list[str]:
+    """The lines of `text` by the protocol's rules, each with its line end."""
+    return _LSP_LINE.findall(text)
+
+
+class _Document(TextDocument):
+    """pygls's document with the protocol's line ends: pygls applies a range
+    edit to the lines str.splitlines makes, so after a form feed or a U+2028
+    every edit landed a line early and the server's text was no longer the
+    editor's (diagnostics, and formatting that wrote the wrong text back)."""
+
+    @property
+    def lines(self) -> Sequence[str]:
+        return tuple(lsp_lines(self.source))
+
+
+class _Workspace(Workspace):
+    def _create_text_document(self, doc_uri: str, source: str | None = None, version: int | None = None,
+                              language_id: str | None = None) -> TextDocument:
+        return _Document(doc_uri, source=source, version=version, language_id=language_id,
+                         sync_kind=self._sync_kind, position_codec=self._position_codec)
 
 
 def uri_to_path(uri: str) -> str:
@@ -110,6 +144,8 @@ class RcsServer(LanguageServer):
         self.indexes: dict[str, symbols.Index] = {}  # uri -> index of its design
         self.sources: dict[str, SourceFile] = {}  # uri -> the text the index was built from
         self.roots: dict[str, tuple[str, bool]] = {}  # uri -> (root file, as a module) of its last check
+        self.read: dict[str, set[str]] = {}  # uri -> the real paths of the files its last check read
+        self.checked: dict[str, str] = {}  # uri -> the editor's text its last check saw
         # The guard analysis of every plan shape met so far: a re-check asks
         # the solver only about plans whose shape the edit changed.
         self.guard_store = cache.MemoryStore()
@@ -132,7 +168,9 @@ class RcsServer(LanguageServer):
         from rcsc import driver
 
         path = uri_to_path(uri)
-        doc = self.workspace.get_text_document(uri)
+        doc = self.opened(uri)
+        if doc is None:  # not open (a save or a request for a document the editor did not open): nothing to check
+            return []
         if "\0" in path:
             # The system's path functions refuse a NUL, and no file has one.
             diag = lsp.Diagnostic(range=lsp.Range(start=lsp.Position(line=0, character=0), end=lsp.Position(line=0, character=0)),
@@ -154,6 +192,7 @@ class RcsServer(LanguageServer):
                     root, as_module = design, False
                     break
         self.roots[uri] = (root, as_module)
+        self.checked[uri] = doc.source
         try:
             result = driver.check_path(root, as_module=as_module, overlay=overlay, memory=self.stores)
         except driver.InputError as exc:
@@ -161,9 +200,12 @@ class RcsServer(LanguageServer):
                                   message=str(exc), severity=lsp.DiagnosticSeverity.Error, source="rcsc")
             self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri=uri, diagnostics=[diag], version=doc.version))
             return [diag]
+        self.read[uri] = {os.path.realpath(f.source.path) for f in result.files}
         config_diags = Diagnostics()
         found = cfg.find(path)
         conf = cfg.load(found[0], found[1], config_diags) if found else cfg.Config()
+        if found:
+            self.publish_config(found[0], config_diags)
         reported = conf.apply(result.diags)
         if getattr(result, "partial", False):
             # The unchanged controllers' plans were not parsed: the index is
@@ -198,6 +240,30 @@ class RcsServer(LanguageServer):
         driver.collect_if_grown()  # the findings are out: what the last checks left can go
         return out
 
+    def opened(self, uri: str) -> TextDocument | None:
+        """The open document `uri`, or None: pygls would read a document the
+        editor has not opened from disk (and fail when there is no such file).
+        pygls keys its documents by the unquoted URI."""
+        return self.workspace.text_documents.get(unquote(uri))
+
+    def publish_config(self, path: str, diags: Diagnostics) -> None:
+        """The configuration's own findings (E0009), on the configuration file,
+        as `rcsc check` reports them there."""
+        out = [lsp.Diagnostic(range=_range(d.span) if d.span is not None else lsp.Range(start=lsp.Position(line=0, character=0),
+                                                                                      end=lsp.Position(line=0, character=0)),
+                              message=d.message, severity=_SEVERITY[d.severity], code=d.code, source="rcsc")
+               for d in diags.sorted()]
+        self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri=path_to_uri(path), diagnostics=out))
+
+    def dependents(self, uri: str) -> list[str]:
+        """The other open documents whose last check read the file of `uri`
+        (a design importing the module being edited)."""
+        path = uri_to_path(uri)
+        if "\0" in path:
+            return []
+        real = os.path.realpath(path)
+        return [u for u, files in self.read.items() if u != uri and real in files and self.opened(u) is not None]
+
     def schedule(self, uri: str, delay: float) -> None:
         """Check `uri` after `delay` seconds unless another edit comes first."""
         task = self.pending.pop(uri, None)
@@ -216,8 +282,8 @@ class RcsServer(LanguageServer):
     def symbol_at(self, uri: str, pos: lsp.Position) -> tuple[symbols.Symbol | None, SourceFile, int]:
         if uri not in self.sources:
             self.check(uri)
-        doc = self.workspace.get_text_document(uri)
-        if self.sources[uri].text != doc.source.replace("\r\n", "\n"):
+        doc = self.opened(uri)
+        if doc is not None and self.checked.get(uri) != doc.source:
             self.check(uri)  # the index is older than the text: renew it
         idx = self.index(uri)
         source = self.sources[uri]  # the text the index was made from
@@ -246,6 +312,11 @@ class RcsServer(LanguageServer):
 
 def make_server() -> RcsServer:
     server = RcsServer()
+    # The protocol makes its Workspace on `initialize` by this module-level
+    # name: ours makes documents with the protocol's line ends (`_Document`).
+    import pygls.protocol.language_server as protocol_module
+
+    protocol_module.Workspace = _Workspace
 
     @server.feature(lsp.TEXT_DOCUMENT_DID_OPEN)
     def did_open(ls: RcsServer, params: lsp.DidOpenTextDocumentParams) -> None:
@@ -253,11 +324,13 @@ def make_server() -> RcsServer:
 
     @server.feature(lsp.TEXT_DOCUMENT_DID_CHANGE)
     def did_change(ls: RcsServer, params: lsp.DidChangeTextDocumentParams) -> None:
-        ls.schedule(params.text_document.uri, DEBOUNCE_SECONDS)
+        for uri in [params.text_document.uri, *ls.dependents(params.text_document.uri)]:
+            ls.schedule(uri, DEBOUNCE_SECONDS)
 
     @server.feature(lsp.TEXT_DOCUMENT_DID_SAVE)
     def did_save(ls: RcsServer, params: lsp.DidSaveTextDocumentParams) -> None:
-        ls.schedule(params.text_document.uri, 0)
+        for uri in [params.text_document.uri, *ls.dependents(params.text_document.uri)]:
+            ls.schedule(uri, 0)
 
     @server.feature(lsp.TEXT_DOCUMENT_DID_CLOSE)
     def did_close(ls: RcsServer, params: lsp.DidCloseTextDocumentParams) -> None:
@@ -267,10 +340,17 @@ def make_server() -> RcsServer:
             task.cancel()
         ls.indexes.pop(uri, None)
         ls.sources.pop(uri, None)
+        ls.checked.pop(uri, None)
         ls.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri=uri, diagnostics=[]))
+        # The designs that read this document's unsaved text now read the file.
+        for other in ls.dependents(uri):
+            ls.schedule(other, 0)
+        ls.read.pop(uri, None)
 
     @server.feature(lsp.TEXT_DOCUMENT_HOVER)
     def hover(ls: RcsServer, params: lsp.HoverParams) -> lsp.Hover | None:
+        if ls.opened(params.text_document.uri) is None:
+            return None
         sym, source, offset = ls.symbol_at(params.text_document.uri, params.position)
         word = symbols.word_at(source, offset)
         if word is not None and symbols.CODE_RE.fullmatch(word[0]) and word[0] in codes.CODES:
@@ -284,6 +364,8 @@ def make_server() -> RcsServer:
 
     @server.feature(lsp.TEXT_DOCUMENT_DEFINITION)
     def definition(ls: RcsServer, params: lsp.DefinitionParams) -> lsp.Location | None:
+        if ls.opened(params.text_document.uri) is None:
+            return None
         sym, _, _ = ls.symbol_at(params.text_document.uri, params.position)
         if sym is None or sym.span.file.path.startswith("<"):
             return None
@@ -292,6 +374,8 @@ def make_server() -> RcsServer:
     @server.feature(lsp.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
     def document_symbol(ls: RcsServer, params: lsp.DocumentSymbolParams) -> list[lsp.DocumentSymbol]:
         uri = params.text_document.uri
+        if ls.opened(uri) is None:
+            return []
         if uri not in ls.sources:
             ls.check(uri)
         idx = ls.index(uri)
@@ -301,6 +385,8 @@ def make_server() -> RcsServer:
     @server.feature(lsp.TEXT_DOCUMENT_COMPLETION)
     def completion(ls: RcsServer, params: lsp.CompletionParams) -> lsp.CompletionList:
         uri = params.text_document.uri
+        if ls.opened(uri) is None:
+            return lsp.CompletionList(is_incomplete=False, items=[])
         if uri not in ls.sources:
             ls.check(uri)
         idx = ls.index(uri)
@@ -316,12 +402,16 @@ def make_server() -> RcsServer:
 
     @server.feature(lsp.TEXT_DOCUMENT_FORMATTING)
     def formatting(ls: RcsServer, params: lsp.DocumentFormattingParams) -> list[lsp.TextEdit] | None:
-        doc = ls.workspace.get_text_document(params.text_document.uri)
+        doc = ls.opened(params.text_document.uri)
+        if doc is None:
+            return None
         formatted, _ = fmt.format_source(uri_to_path(doc.uri), doc.source)
         if formatted is None or formatted == doc.source:
             return [] if formatted is not None else None
-        lines = doc.source.split("\n")
-        end = lsp.Position(line=len(lines) - 1, character=_utf16_len(lines[-1]))
+        # The end of the text by the protocol's line ends (`\r` alone too).
+        lines = lsp_lines(doc.source)
+        ended = not lines or lines[-1].endswith(("\n", "\r"))
+        end = lsp.Position(line=len(lines), character=0) if ended else lsp.Position(line=len(lines) - 1, character=_utf16_len(lines[-1]))
         return [lsp.TextEdit(range=lsp.Range(start=lsp.Position(line=0, character=0), end=end), new_text=formatted)]
 
     return server
