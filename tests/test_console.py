@@ -207,6 +207,14 @@ BAD_LINES = [
     ("SM.TRANSIT(speed = 99.0 * 2, leg_time = 1 s)", "E0206"),
     ("SM.FLY()", "E0105"),
     ("SM.INIT(", "E0001"),
+    # Digits that str.isdigit accepts and int() refuses or reads otherwise.
+    ("step \u00b2", "E0812"),
+    ("step \u0663", "E0812"),
+    ("stop", "E0814"),
+    ("stop MAIN", "E0814"),
+    # Names that only start like a scenario keyword are names (no such variable here).
+    ("expected_load = 2.5", "E0100"),
+    ("cycles_left = 3", "E0100"),
 ]
 
 
@@ -217,6 +225,8 @@ def test_bad_console_input_gets_a_coded_diagnostic(builds: Builds) -> None:
     chunks = re.split(r"^controller ", r.stdout, flags=re.M)[: len(BAD_LINES)]
     for (line, code), chunk in zip(BAD_LINES, chunks):
         assert f"error[{code}]" in chunk, (line, chunk)
+    # Every finding points into the line typed, never into text the console added.
+    assert "cycles 1" not in r.stdout
     # Nothing bad was applied: SM is still uninitialised at cycle 0.
     last = tables(r.stdout)[-1]
     assert last["SM"]["status"] == "UNINITIALIZED" and last["_program"]["line"].startswith("cycle 0, paused")
@@ -250,6 +260,20 @@ def test_program_that_ended_gets_a_warning(builds: Builds) -> None:
         assert prog.proc.wait(timeout=10) == 0
     assert "warning[W0810]" in r.stdout, r.stdout
     assert "cycle 3, finished" in r.stdout
+
+
+def test_a_killed_program_is_not_shown_as_running(builds: Builds) -> None:
+    """A program killed with SIGKILL cannot remove its segment: the console
+    says it is gone (E0810) instead of showing its last table as paused."""
+    with Running(main_program(builds, "c"), "--paused") as prog:
+        seg = Path("/dev/shm") / f"rcs-submarine-{prog.run}.console"
+        prog.proc.kill()
+        prog.proc.wait(timeout=10)
+        try:
+            r = console_pipes(prog.run, "status\n")
+        finally:
+            seg.unlink(missing_ok=True)
+    assert r.returncode == 1 and "error[E0810]" in r.stderr and "is no longer running" in r.stderr, r.stdout + r.stderr
 
 
 @pytest.mark.parametrize("target", TARGETS)

@@ -139,6 +139,14 @@ class Segment:
         if self.word(H_MAGIC) != MAGIC or self.word(H_VERSION) != 1 or self.word(H_WORDS) * 8 != size:
             self.close()
             raise ConsoleError("E0810", f"{path} is not an operator segment of this rcsc version")
+        if self.word(H_RUN_STATE) != 2 and not self.alive():
+            # A program that ends marks its segment ended (and removes it);
+            # one killed (SIGKILL, a crash) leaves it as it was, paused or
+            # running, and would be shown so.
+            pid = self.word(H_PID)
+            self.close()
+            raise ConsoleError("E0810", f"the Main Program of run `{run}` is no longer running: process {pid} ended without "
+                                        f"removing {path} (it was killed or crashed; delete that file)")
         self.text_read = 0
         self.info: dict[str, str] = {}
         self.fields: list[str] = []
@@ -164,7 +172,7 @@ class Segment:
                 setattr(self.ctrls[-1], key, ["" if w == "-" else w for w in words])
             elif key == "statuses" and self.ctrls:
                 self.ctrls[-1].statuses = {int(v): n for n, v in (w.split("=") for w in words)}
-            elif key in ("state", "rule") and len(words) == 3 and words[0].isdigit() and words[1].isdigit():
+            elif key in ("state", "rule") and len(words) == 3 and _digits(words[0]) and _digits(words[1]):
                 names = getattr(self.ctrls[int(words[0])], key + "s")
                 names.extend([""] * (int(words[1]) + 1 - len(names)))
                 names[int(words[1])] = words[2]
@@ -346,7 +354,7 @@ class Session:
         return self.ctrl_ids[name]
 
     def count(self, line: str, word: str) -> int | None:
-        if not word.isdigit() or not 1 <= int(word) <= 2**32 - 1:
+        if not _digits(word) or not 1 <= int(word) <= 2**32 - 1:
             self.problem("E0812", line, f"`{word}` is not a step count (1..4294967295)", "not a count")
             return None
         return int(word)
@@ -370,7 +378,7 @@ class Session:
             self.send(line, head)
             if head == "quit":
                 return False
-        elif head == "step" and len(words) == 1 or (head == "step" and len(words) == 2 and words[1].isdigit()):
+        elif head == "step" and len(words) == 1 or (head == "step" and len(words) == 2 and _digits(words[1])):
             n = self.count(line, words[1]) if len(words) == 2 else 1
             if n is not None:
                 start = self.seg.word(H_CYCLE)
@@ -394,12 +402,16 @@ class Session:
         from rcsc.front.scenario import text_to_scenario
         from rcsc.outputs.events import event_text
 
-        if text.startswith(("at ", "expect", "cycles", "scenario")):
+        if re.match(r"(at|expect|cycles|scenario)\b(?!\s*[=.(\[])", text):
             self.problem("E0814", line, "type the command or input alone (`SM.INIT()`, `trip = true`): the console sends it at the next cycle", "not an operator action")
             return
-        # The line as the one event of a one-cycle scenario (its diagnostics
-        # point into `at 1: LINE`, line 1 of `<console>`).
-        src = SourceFile("<console>", f"at 1: {text}\ncycles 1\n")
+        if re.match(r"(stop|freeze)\b(?!\s*[=.(\[])", text):
+            self.problem("E0814", line, "`stop` and `freeze` are scenario faults; pause one controller with `pause NODE`", "not an operator action")
+            return
+        # The line as the one event of a one-cycle scenario, last, so that
+        # every diagnostic points into it (`at 1: LINE`, line 2 of
+        # `<console>`), an unfinished line at its end.
+        src = SourceFile("<console>", f"cycles 1\nat 1: {text}")
         diags = Diagnostics()
         sc = text_to_scenario(src, self.design, diags)
         if sc is None or diags.has_errors():
@@ -409,6 +421,11 @@ class Session:
             self.problem("E0814", line, "`stop` and `freeze` are scenario faults; pause one controller with `pause NODE`", "not an operator action")
             return
         self.send(line, "events\n" + event_text(self.design, sc, self.ctrls))
+
+
+def _digits(word: str) -> bool:
+    """ASCII digits only: str.isdigit also accepts `²` and `٣`, which int() refuses or reads otherwise."""
+    return re.fullmatch(r"[0-9]+", word) is not None
 
 
 def run_console(design, run: str, lines, out, color: bool = False, prompt: bool = False) -> int:
