@@ -386,3 +386,14 @@ def test_the_configurations_own_findings_are_published_on_it(client: Client, tmp
     assert [(d["code"], d["range"]["start"]) for d in found] == [("E0009", {"line": 0, "character": 10})]
     client.diagnostics(uri)
     assert client.close() == 0
+
+
+def test_a_lone_surrogate_in_the_document_still_gets_its_findings(client: Client, tmp_path: Path) -> None:
+    """An editor can hold a lone UTF-16 surrogate; the finding that quotes
+    it must still reach the editor (it could not be encoded, and nothing was
+    published for the document)."""
+    text = DESIGN.replace("gm speed: f64 = 0.0", "gm speed: f64 = 0.0\ngm \ud83dspeed: f64 = 0.0")
+    uri = _open(client, tmp_path / "d.rcs", text)
+    found = client.diagnostics(uri, timeout=30)
+    assert any(d.get("code") == "E0002" for d in found), found
+    assert client.close() == 0

@@ -109,7 +109,9 @@ def path_to_uri(path: str) -> str:
 
 
 def _utf16_len(text: str) -> int:
-    return len(text.encode("utf-16-le")) // 2
+    """UTF-16 code units: two for a character beyond U+FFFF, one for any
+    other (a lone surrogate too, which the codec would refuse)."""
+    return len(text) + sum(1 for ch in text if ord(ch) > 0xFFFF)
 
 
 def _position(source: SourceFile, offset: int) -> lsp.Position:
