@@ -1142,6 +1142,12 @@ def _silence_stdout() -> None:
 _ARGV: list[str] = []
 
 
+# The arguments of every command that name files it reads (a list for
+# `paths` and the repeatable `--measured`): no report of the command may
+# replace one of them (`safeio.command_files`).
+_INPUT_ARGUMENTS = ("path", "paths", "scenario", "externs", "config", "measured", "callgrind")
+
+
 def _main(argv: list[str] | None) -> int:
     global _ARGV
     if argv is None:
@@ -1154,7 +1160,10 @@ def _main(argv: list[str] | None) -> int:
     # before reading them (`rcsc test s.scn --junit s.scn` with no design
     # beside the scenario): no report may replace them.  Folders and
     # patterns are claimed file by file as they are read.
-    named = [getattr(args, key, None) for key in ("path", "scenario", "externs", "config")] + list(getattr(args, "paths", None) or [])
+    named: list = []
+    for key in _INPUT_ARGUMENTS:
+        value = getattr(args, key, None)
+        named += value if isinstance(value, list) else [value]
     safeio.claim_inputs(p for p in named if isinstance(p, str) and p != "-")
     code = args.run(args)
     if not sys.stdout.closed:  # the language server closes it on `exit`

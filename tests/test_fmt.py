@@ -213,3 +213,13 @@ def test_a_name_plan_at_the_start_of_a_line_is_not_a_plan(monkeypatch, capsys) -
     monkeypatch.setattr("sys.stdin", _Stdin(text.encode()))
     assert cli.main(["fmt", "-"]) == 0
     assert capsys.readouterr().out == text
+
+
+def test_a_local_named_plan_continuing_an_expression_is_not_a_plan(monkeypatch, capsys) -> None:
+    """`plan or ready;` inside `post` is an expression: it made the next
+    record a state table, and formatting stopped with an internal error."""
+    text = 'design g\nimport std.lifecycle\ngm ready: bool = false from env\ngm out: bool = false to env\ncontroller C level 1 budget 100 us {\n    verbs Lifecycle\n    reads ready\n    writes out\n    local plan: bool = false\n    plan INIT {\n        E0: ready | new -> done;\n        E1: otherwise | new -> done;\n    }\n    plan HALT { E0: true | new -> done; }\n    plan ABORT { E0: true | new -> done; }\n    post {\n        out = ready and\n            plan or ready;\n    }\n}\nrecord Spec {\n    count: i32,\n    gain_long_name: f64,\n}\ncpu MAIN {\n    heartbeat 10 ms\n    schedule C\n}\n'
+    monkeypatch.setattr("sys.stdin", _Stdin(text.encode()))
+    assert cli.main(["fmt", "-"]) == 0
+    out = capsys.readouterr().out
+    assert out == text.replace("E0: ready | new", "E0: ready     | new")

@@ -301,6 +301,11 @@ def test_a_document_whose_path_holds_a_nul_does_not_stop_the_others(client: Clie
     client.notify("textDocument/didOpen", {"textDocument": {"uri": bad, "languageId": "rcs", "version": 1, "text": DESIGN}})
     found = client.diagnostics(bad)
     assert [d["message"] for d in found] == ["the document's path holds a NUL character: no file can have it, so it is not checked"]
+    pos = {"line": 0, "character": 0}  # requests on it answer nothing (they raised KeyError)
+    assert client.request("textDocument/hover", {"textDocument": {"uri": bad}, "position": pos}) is None
+    assert client.request("textDocument/definition", {"textDocument": {"uri": bad}, "position": pos}) is None
+    assert client.request("textDocument/documentSymbol", {"textDocument": {"uri": bad}}) == []
+    assert client.request("textDocument/completion", {"textDocument": {"uri": bad}, "position": pos})["items"] == []
     path = tmp_path / "d.rcs"
     uri = _open(client, path, DESIGN.replace("speed > 2.0", "sped > 2.0"))
     assert any(d.get("code") == "E0100" for d in client.diagnostics(uri))

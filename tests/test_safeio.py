@@ -286,6 +286,15 @@ def test_no_report_replaces_an_input_of_the_same_command(tmp_path: Path, capsys)
         err = capsys.readouterr().err
         assert "it is an input of this command" in err or "no design for it" in err, (argv, err)
         assert _snapshot(folder) == before, argv
+    # A design with errors stops before its scenarios are read: they are
+    # inputs all the same.
+    broken = tmp_path / "broken"
+    broken.mkdir()
+    (broken / "b.rcs").write_text("design b\ncontroller {\n")
+    (broken / "b_run.scn").write_text("cycles 2\n")
+    assert main(["test", str(broken / "b.rcs"), "--junit", str(broken / "b_run.scn")]) == 2
+    assert "it is an input of this command" in capsys.readouterr().err
+    assert (broken / "b_run.scn").read_text() == "cycles 2\n"
     # Two reports of one command to one file: the second is refused.
     trace = tmp_path / "t.jsonl"
     assert main(["sim", d, "--scenario", s, "-o", str(trace), "--step-log", str(trace)]) == 2

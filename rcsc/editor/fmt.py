@@ -29,9 +29,10 @@ from dataclasses import dataclass
 INDENT = 4
 
 _RULE_START = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\s*:(?!:)")
-# `plan NAME` inside a controller: a line that only starts with the word (a
-# constant named `plan` continuing an expression at the top level) is not one.
-_PLAN_HEAD = re.compile(r"\s*plan\s+[A-Za-z_]")
+# A plan's head, `plan NAME [continuous] [ordered] {`, in a controller's body
+# (depth 1): a line that only starts with the word (a local or constant named
+# `plan` continuing an expression, `plan or ready;`) is not one.
+_PLAN_HEAD = re.compile(r"\s*plan\s+[A-Za-z_]\w*(?:\s+(?:continuous|ordered))*\s*(?:\{|$)")
 
 
 def _code_mask(text: str) -> list[bool]:
@@ -135,7 +136,7 @@ def format_text(text: str) -> str:
             i = j
             continue
         out.append(indent + stripped if line.ends_in_comment else (indent + stripped).rstrip())
-        if depth >= 1 and _PLAN_HEAD.match(code):
+        if depth == 1 and _PLAN_HEAD.match(code):
             pending_plan = True
         for ch in code:
             if ch == "{":
@@ -284,7 +285,9 @@ def _parse_rule(rule_lines: list[_Line], d: int, block: list) -> _Rule:
     code = first.code_chars()
     semi_line = rule_lines[-1]
     semi_code = semi_line.code_chars()
-    semi = semi_code.index(";")
+    semi = semi_code.find(";")
+    if semi < 0:
+        return verbatim  # not a rule after all: left as written
     tail_text = semi_line.text[semi + 1:]
     tail = "" if not tail_text.strip() else (" " * max(1, _indent_width(tail_text)) + tail_text.strip())
     if tail.strip() and not tail.strip().startswith("//"):

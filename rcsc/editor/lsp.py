@@ -198,6 +198,8 @@ class RcsServer(LanguageServer):
         try:
             result = driver.check_path(root, as_module=as_module, overlay=overlay, memory=self.stores)
         except driver.InputError as exc:
+            self.sources.pop(uri, None)  # no index for a design that cannot be read
+            self.indexes.pop(uri, None)
             diag = lsp.Diagnostic(range=lsp.Range(start=lsp.Position(line=0, character=0), end=lsp.Position(line=0, character=0)),
                                   message=str(exc), severity=lsp.DiagnosticSeverity.Error, source="rcsc")
             self.text_document_publish_diagnostics(lsp.PublishDiagnosticsParams(uri=uri, diagnostics=[diag], version=doc.version))
@@ -281,12 +283,20 @@ class RcsServer(LanguageServer):
 
     # -- lookups ---------------------------------------------------------------
 
-    def symbol_at(self, uri: str, pos: lsp.Position) -> tuple[symbols.Symbol | None, SourceFile, int]:
-        if uri not in self.sources:
-            self.check(uri)
+    def checked_source(self, uri: str) -> SourceFile | None:
+        """The text of `uri` as its current check saw it (checking it first if
+        needed), or None for a document that has no check (not open, a path
+        no file can have, an unreadable design)."""
         doc = self.opened(uri)
-        if doc is not None and self.checked.get(uri) != doc.source:
-            self.check(uri)  # the index is older than the text: renew it
+        if doc is None:
+            return None
+        if uri not in self.sources or self.checked.get(uri) != doc.source:
+            self.check(uri)  # none yet, or older than the text: renew it
+        return self.sources.get(uri) if uri in self.roots else None
+
+    def symbol_at(self, uri: str, pos: lsp.Position) -> tuple[symbols.Symbol | None, SourceFile | None, int]:
+        if self.checked_source(uri) is None:
+            return None, None, 0
         idx = self.index(uri)
         source = self.sources[uri]  # the text the index was made from
         offset = _offset(source, pos)
@@ -351,9 +361,9 @@ def make_server() -> RcsServer:
 
     @server.feature(lsp.TEXT_DOCUMENT_HOVER)
     def hover(ls: RcsServer, params: lsp.HoverParams) -> lsp.Hover | None:
-        if ls.opened(params.text_document.uri) is None:
-            return None
         sym, source, offset = ls.symbol_at(params.text_document.uri, params.position)
+        if source is None:
+            return None
         word = symbols.word_at(source, offset)
         if word is not None and symbols.CODE_RE.fullmatch(word[0]) and word[0] in codes.CODES:
             text = codes.explain(word[0]) or ""
@@ -366,8 +376,6 @@ def make_server() -> RcsServer:
 
     @server.feature(lsp.TEXT_DOCUMENT_DEFINITION)
     def definition(ls: RcsServer, params: lsp.DefinitionParams) -> lsp.Location | None:
-        if ls.opened(params.text_document.uri) is None:
-            return None
         sym, _, _ = ls.symbol_at(params.text_document.uri, params.position)
         if sym is None or sym.span.file.path.startswith("<"):
             return None
@@ -376,10 +384,8 @@ def make_server() -> RcsServer:
     @server.feature(lsp.TEXT_DOCUMENT_DOCUMENT_SYMBOL)
     def document_symbol(ls: RcsServer, params: lsp.DocumentSymbolParams) -> list[lsp.DocumentSymbol]:
         uri = params.text_document.uri
-        if ls.opened(uri) is None:
+        if ls.checked_source(uri) is None:
             return []
-        if uri not in ls.sources:
-            ls.check(uri)
         idx = ls.index(uri)
         path = ls.sources[uri].path
         return [_doc_symbol(s) for s in idx.top.get(path, [])]
@@ -387,10 +393,8 @@ def make_server() -> RcsServer:
     @server.feature(lsp.TEXT_DOCUMENT_COMPLETION)
     def completion(ls: RcsServer, params: lsp.CompletionParams) -> lsp.CompletionList:
         uri = params.text_document.uri
-        if ls.opened(uri) is None:
+        if ls.checked_source(uri) is None:
             return lsp.CompletionList(is_incomplete=False, items=[])
-        if uri not in ls.sources:
-            ls.check(uri)
         idx = ls.index(uri)
         items = {}
         for name, sym in idx.globals.items():

@@ -98,6 +98,7 @@ def discover(paths: list[str]) -> tuple[list[tuple[str, list[str]]], list[str]]:
     """[(design, [scenario, ...])] in a stable order, and problems found on the way."""
     plan: dict[str, list[str]] = {}
     problems: list[str] = []
+    unclaimed: list[str] = []  # scenarios beside several designs that none of them claims
     for p in paths:
         if os.path.isdir(p):
             for root, dirs, files in os.walk(p):
@@ -111,9 +112,11 @@ def discover(paths: list[str]) -> tuple[list[tuple[str, list[str]]], list[str]]:
                 if len(designs) > 1:  # with one design every scenario beside it is its own
                     for where in (root, os.path.join(root, "scenarios")):
                         if os.path.isdir(where):
-                            problems += [f"{os.path.join(where, f)}: no design beside it is named like `{_stem(f)}` "
-                                         "(`NAME.rcs` owns `NAME.scn` and `NAME_*.scn`)"
-                                         for f in sorted(os.listdir(where)) if f.endswith(".scn") and os.path.join(where, f) not in claimed]
+                            orphans = [os.path.join(where, f) for f in sorted(os.listdir(where))
+                                       if f.endswith(".scn") and os.path.join(where, f) not in claimed]
+                            unclaimed += orphans
+                            problems += [f"{o}: no design beside it is named like `{_stem(o)}` (`NAME.rcs` owns `NAME.scn` and `NAME_*.scn`)"
+                                         for o in orphans]
         elif p.endswith(".scn") and os.path.isfile(p):
             d = design_of(p)
             if d is None:
@@ -125,7 +128,17 @@ def discover(paths: list[str]) -> tuple[list[tuple[str, list[str]]], list[str]]:
             plan.setdefault(p, []).extend(scenarios_of(p))
         else:
             problems.append(f"{p}: no such file or folder")
-    return [(d, sorted(set(s))) for d, s in plan.items()], problems
+    # One entry per file however it was reached (`a.scn` named and `./a.scn`
+    # found beside `a.rcs` are one scenario, run once).
+    merged: dict[str, set[str]] = {}
+    for d, ss in plan.items():
+        merged.setdefault(os.path.normpath(d), set()).update(os.path.normpath(s) for s in ss)
+    found = [(d, sorted(ss)) for d, ss in merged.items()]
+    # Every design and scenario found is an input of the run, read or not
+    # (a design with errors stops before its scenarios are read): no report
+    # (`--junit`) may replace one.
+    safeio.claim_inputs([d for d, _ in found] + [s for _, ss in found for s in ss] + unclaimed)
+    return found, problems
 
 
 @dataclass
