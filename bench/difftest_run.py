@@ -150,7 +150,8 @@ def observed_from_trace(seed: int, model, sc, run, trace: bytes) -> list[Finding
     for want, got in zip(run.snapshots, rebuilt):
         a, b = _observed(want), _observed(got)
         if a != b:
-            diff = next(f"{k}: sim {a[k]!r}, from the trace {b.get(k)!r}" for k in a if a[k] != b.get(k))
+            diff = next((f"{k}: sim {a.get(k)!r}, from the trace {b.get(k)!r}" for k in sorted(a.keys() | b.keys())
+                         if a.get(k) != b.get(k)))
             return [Finding(seed, "disagree", "rcsc test --target (what expectations see)", f"tick {want.cycle}: {diff}")]
     if len(run.snapshots) != len(rebuilt):
         return [Finding(seed, "disagree", "rcsc test --target (what expectations see)",

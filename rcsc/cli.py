@@ -255,7 +255,7 @@ def _cli_overrides(args: argparse.Namespace):
     # one that names no warning would silently hide them all.
     if select is not None and not select:
         raise UsageError("--select: no code given (to report no warnings, use --ignore W)")
-    if select and all(v.upper().startswith("E") for v in select):
+    if select and cfg.selects_no_warning(select):
         raise UsageError(f"--select: `{args.select}` names no warning (errors are always reported; --select chooses warnings, e.g. W05)")
     severity: dict = {}
     for item in args.severity:

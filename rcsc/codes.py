@@ -118,16 +118,24 @@ and rule label must be unique in its scope.
     ("W0101", _W, "a status field or value named like a built-in status", """
 A status field, and an extra status value of `reports`, are there to be read:
 by the supervisor (`SUB.name`), by scenarios (`NAME.name`) and by the
-console. A few names already mean something there. A supervisor reads `SUB.done`, `SUB.error`, `SUB.executing`,
-`SUB.error_code` and `SUB.age` as the built-in view of the subordinate; a
-scenario reads `NAME.echo`, `NAME.status`, `NAME.state`, `NAME.rule` and
-`NAME.verb` as the controller's status block. A status field with one of these
-names still holds its value (and a status value is still reported), and the
-generated code keeps it, but those readers never see it: they read the
-built-in, so a supervisor that waits on `SUB.done` after `report done` waits
-for the plan to finish instead. The field is reported so that
-the mistake shows where it is made, not later as a supervisor that waits on
-the wrong `done`.
+console. A few names already mean something there.
+
+A supervisor reads `SUB.done`, `SUB.error`, `SUB.executing`, `SUB.error_code`
+and `SUB.age` as its built-in view of the subordinate, and a scenario reads
+`NAME.done`, `NAME.error`, `NAME.executing`, `NAME.error_code` and
+`NAME.echo` from the controller's status block. A status field or value with
+one of these names still holds its value (a status value is still reported),
+and the generated code keeps it, but those readers never see it: they read
+the built-in, so a supervisor that waits on `SUB.done` after `report done`
+waits for the plan to finish instead.
+
+A scenario also compares `NAME.status`, `NAME.state`, `NAME.rule` and
+`NAME.verb` with names (`NAME.state == S1`). A field with one of these names
+is read as the field elsewhere (`NAME.state > 2`), and as the built-in in
+such a comparison: one name with two meanings, reported too.
+
+(A status field named like one of the controller's own status values is
+E0101: `SUB.homed` could name either.)
 
 Wrong:
 

@@ -109,12 +109,22 @@ def find(start: str) -> tuple[str, bool] | None:
 
 
 def _has_tool_table(path: str) -> bool:
+    """Whether a pyproject.toml configures rcsc: a `tool.rcsc` key however
+    TOML spells it (`[tool.rcsc]`, `[[tool.rcsc]]`, `rcsc.ignore = ...` under
+    `[tool]`), which `load` then reads or reports (E0009).  A file that is not
+    valid TOML counts when a line names the table, so that its mistake is
+    reported rather than the file passed over."""
+    import tomllib
+
     try:
-        with open(path, encoding="utf-8") as f:
-            # `[[tool.rcsc]]` too: an array of tables, reported (E0009) rather than ignored.
-            return any(line.strip().replace(" ", "").lstrip("[").startswith("tool.rcsc") for line in f)
-    except (OSError, UnicodeDecodeError):
+        text = safeio.read_text(path)
+    except OSError:
         return False
+    try:
+        tool = tomllib.loads(text).get("tool")
+    except tomllib.TOMLDecodeError:
+        return re.search(r"^\s*\[+\s*tool\s*\.\s*rcsc\s*[\].]", text, re.M) is not None
+    return isinstance(tool, dict) and "rcsc" in tool
 
 
 def load_for(start: str, diags: Diagnostics, explicit: str | None = None) -> Config:
@@ -156,6 +166,12 @@ def load(path: str, in_pyproject: bool, diags: Diagnostics) -> Config:
     return config
 
 
+def selects_no_warning(codes: list[str]) -> bool:
+    """Whether a non-empty `select` names only error codes, and so would hide
+    every warning without saying so (an empty one says "no warnings")."""
+    return bool(codes) and all(c.upper().startswith("E") for c in codes)
+
+
 def _read_table(table: dict, config: Config, source: SourceFile, section: str, diags: Diagnostics) -> None:
     def bad(key: str, message: str, label: str, sub: str = "") -> None:
         sec = f"{section}.{key}".strip(".") if sub else section
@@ -174,6 +190,10 @@ def _read_table(table: dict, config: Config, source: SourceFile, section: str, d
                 config.exclude = list(value)
                 continue
             codes = _codes(value, key, source, section, diags)
+            if key == "select" and selects_no_warning(codes):
+                bad(key, "`select` names no warning: errors are always reported, and `select` chooses the warnings",
+                    "only error codes")
+                continue
             if key == "select":
                 config.select = codes
             else:

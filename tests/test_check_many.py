@@ -280,7 +280,7 @@ def test_junit_reports_a_design_error_as_error_with_its_diagnostic(tmp_path, mon
     assert (root.get("failures"), root.get("errors")) == ("0", "1")
     error = root.find("./testsuite/testcase/error")
     assert error is not None and root.find("./testsuite/testcase/failure") is None
-    assert error.get("message") == "./d.rcs:3:17: error[E0100]: cannot find `nope` in this scope"
+    assert error.get("message") == "d.rcs:3:17: error[E0100]: cannot find `nope` in this scope"
     assert "the design has errors" in error.text and "error[E0100]" in error.text
 
 
@@ -293,3 +293,36 @@ def test_a_select_that_names_no_warning_is_a_usage_error(tmp_path, monkeypatch, 
         assert rc == 2 and lines == [] and err.startswith("error: --select: "), (value, err)
     rc, lines, err = _short(["proj/b.rcs", "--select", "W04,E01"], capsys)
     assert rc == 0 and err == ""
+
+
+def test_select_of_only_errors_in_the_configuration_is_a_finding(tmp_path, monkeypatch, capsys) -> None:
+    proj = _tree(tmp_path, monkeypatch)
+    (proj / "rcsc.toml").write_text('select = ["E0100"]\n')
+    rc, lines, _ = _short(["proj/b.rcs"], capsys)
+    assert "proj/rcsc.toml:1:1: error[E0009]: `select` names no warning: errors are always reported, and `select` chooses the warnings" in lines
+
+
+def test_pyproject_counts_when_toml_says_tool_rcsc(tmp_path, monkeypatch, capsys) -> None:
+    """`tool.rcsc` however TOML spells it; a table merely named like it
+    (`[tool.rcscx]`) is not rcsc's and does not hide a configuration above."""
+    proj = _tree(tmp_path, monkeypatch)
+    (proj / "rcsc.toml").write_text('ignore = ["W"]\n')
+    sub = proj / "sub"
+    (sub / "d.rcs").write_text(DESIGN.format(name="d", imports=""))
+    (sub / "pyproject.toml").write_text("[tool.rcscx]\na = 1\n")
+    rc, lines, _ = _short(["proj/sub/d.rcs"], capsys)
+    assert not [line for line in lines if "warning[" in line], lines
+    (proj / "rcsc.toml").unlink()
+    rc, with_warnings, _ = _short(["proj/sub/d.rcs"], capsys)
+    assert [line for line in with_warnings if "warning[" in line]
+    (sub / "pyproject.toml").write_text('[tool]\nrcsc.ignore = ["W"]\n')
+    rc, lines, _ = _short(["proj/sub/d.rcs"], capsys)
+    assert not [line for line in lines if "warning[" in line], lines
+
+
+def test_a_module_with_a_controller_checked_alone_needs_no_cpu(tmp_path, monkeypatch, capsys) -> None:
+    _tree(tmp_path, monkeypatch)
+    (tmp_path / "proj" / "sub" / "lonely.rcs").write_text(
+        "module lonely\ngm x: f64 = 0.0 to env\nsimulator P level 0 budget 1 us { writes x post { x = x + 1.0; } }\n")
+    rc, lines, _ = _short(["proj/sub/lonely.rcs"], capsys)
+    assert not [line for line in lines if "E0605" in line], lines

@@ -86,6 +86,11 @@ def test_a_persons_externs_file_linked_into_the_build_is_kept(tmp_path: Path, ca
     assert os.path.islink(out / "extern_cpu_externs.c") and mine.read_text() == "/* my externs */\n"
     assert (out / "Makefile").exists()
     capsys.readouterr()
+    # A link to nothing (or to a folder) would only fail later, in make: refused now.
+    os.unlink(out / "extern_cpu_externs.c")
+    os.symlink(tmp_path / "nowhere.c", out / "extern_cpu_externs.c")
+    assert main(["build", str(design), "--target", "c", "-o", str(out)]) == 2
+    assert "it is a symbolic link to no file" in capsys.readouterr().err
 
 
 def test_a_symlinked_subfolder_is_refused(tmp_path: Path, capsys) -> None:

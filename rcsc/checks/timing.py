@@ -24,7 +24,7 @@ def budget_table(design: Design, cpu: m.Cpu) -> list[tuple[str, int]]:
 
 
 def check(design: Design, diags: Diagnostics) -> None:
-    if not design.cpus and (design.controllers or not design.is_module):
+    if not design.cpus and not design.is_module:  # a module checked on its own runs nowhere by itself
         # A design is what runs: without a CPU there is no Main Program to
         # build and nothing for the simulator to step, even with no controller.
         diag = diags.add("E0605", design.span, f"design `{design.name}` has no `cpu`", "no cpu")

@@ -140,8 +140,8 @@ def _gm_path(e: ast.Expr) -> list[ast.Ident] | None:
     return None
 
 
-def _memory_read(value: ast.Expr, gm: set[str]) -> ast.Name | None:
-    """The first name of a Global Memory variable in a value parameter's argument."""
+def _memory_read(value: ast.Expr, gm) -> ast.Name | None:
+    """The first name of a variable (`gm`: its names) in a value parameter's argument."""
     if isinstance(value, ast.Name):
         return value if value.name in gm else None
     for f in dataclasses.fields(value):
@@ -158,14 +158,15 @@ def _memory_read(value: ast.Expr, gm: set[str]) -> ast.Name | None:
     return None
 
 
-def _memory_argument(p: ast.Param, value: ast.Expr, gm: set[str], what: str, diags: Diagnostics) -> bool:
-    """E0204 for a value parameter given a Global Memory variable: a value
-    parameter is a constant of the instance.  Reported once, here, instead of
-    as a read the body does not declare and again as a non-constant."""
-    name = _memory_read(value, gm)
+def _memory_argument(p: ast.Param, value: ast.Expr, variables: dict[str, str], what: str, diags: Diagnostics) -> bool:
+    """E0204 for a value parameter given a variable (`variables`: name -> what
+    it is, "a Global Memory variable", "a local of `C`"): a value parameter
+    is a constant of the instance.  Reported once, here, instead of as a read
+    the body does not declare and again as a non-constant."""
+    name = _memory_read(value, variables)
     if name is None:
         return False
-    diag = diags.add("E0204", name.span, f"`{name.name}` is a Global Memory variable: value parameter `{p.name.name}` of {what} takes a constant",
+    diag = diags.add("E0204", name.span, f"`{name.name}` is {variables[name.name]}: value parameter `{p.name.name}` of {what} takes a constant",
                      "a variable").with_label(p.name.span, "a value parameter")
     if what.startswith("controller type"):
         diag.with_help(f"to give each instance a variable, declare `{p.name.name}: gm` and read it with `reads {p.name.name}` in the type")
@@ -262,7 +263,7 @@ def expand(files, diags: Diagnostics) -> list[list[ast.Node]]:
     ctypes: dict[str, ast.ControllerType] = {}
     btypes: dict[str, ast.BlockType] = {}
     broken: set[str] = set()  # types with repeated parameters: reported once, not instantiated
-    gm: set[str] = set()  # Global Memory names (a value parameter given one is E0204)
+    gm: dict[str, str] = {}  # Global Memory names (a value parameter given one is E0204)
     for f in files:
         if f.tree is None:
             continue
@@ -272,7 +273,7 @@ def expand(files, diags: Diagnostics) -> list[list[ast.Node]]:
             elif isinstance(item, ast.BlockType):
                 btypes.setdefault(item.name.name, item)
             elif isinstance(item, ast.GmVar):
-                gm.add(item.name.name)
+                gm[item.name.name] = "a Global Memory variable"
     used: set[str] = set()
     for t in [*ctypes.values(), *btypes.values()]:
         seen: set[str] = set()
@@ -324,7 +325,7 @@ def _placeholder(item: ast.ControllerInstance) -> ast.Controller:
 
 
 def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerType], used: set[str], diags: Diagnostics,
-                 gm: set[str]) -> ast.Controller | None:
+                 gm: dict[str, str]) -> ast.Controller | None:
     t = ctypes.get(item.type_name.name)
     if t is None:
         diag = diags.add("E0260", item.type_name.span, f"no controller type named `{item.type_name.name}`", "unknown controller type")
@@ -424,8 +425,11 @@ class _StepCopier(_Copier):
 
 
 def _lower_blocks(ctrl: ast.Controller, btypes: dict[str, ast.BlockType], used: set[str], diags: Diagnostics, broken: set[str],
-                 gm: set[str]) -> None:
+                 gm: dict[str, str]) -> None:
     insts: dict[str, _Inst] = {}
+    # What a block's value parameter may not be given: a variable of the design or of this controller.
+    variables = gm | {d.name.name: f"a local of `{ctrl.name.name}`" for d in ctrl.locals} | {
+        d.name.name: f"a status field of `{ctrl.name.name}`" for d in ctrl.status_fields}
     taken = {d.name.name for d in ctrl.status_fields + ctrl.locals}
     for use in ctrl.blocks:
         if use.type_name.name in broken:
@@ -445,7 +449,7 @@ def _lower_blocks(ctrl: ast.Controller, btypes: dict[str, ast.BlockType], used: 
         args = _bind(t.params, use.args, f"block `{t.name.name}`", use.type_name, diags)
         if args is None:
             continue
-        memory = [_memory_argument(p, args[p.name.name].value, gm, f"block `{t.name.name}`", diags) for p in t.params if p.name.name in args]
+        memory = [_memory_argument(p, args[p.name.name].value, variables, f"block `{t.name.name}`", diags) for p in t.params if p.name.name in args]
         if any(memory):
             continue
         if not t.steps:

@@ -290,10 +290,13 @@ def write_tree(files: list[TreeFile], out_dir: str, is_ours: Callable[[str], boo
                 plan.append((f, path))
                 continue
             st = os.lstat(path)
-            if f.user and stat.S_ISLNK(st.st_mode):
+            if f.user and stat.S_ISLNK(st.st_mode) and is_regular_file(path):
                 # A person's own file (an extern's code) kept elsewhere and
                 # linked in: it is theirs, and rcsc writes it only when missing.
                 res.kept.append(f.path)
+            elif f.user and stat.S_ISLNK(st.st_mode):
+                res.refused.append(f"{f.path}: it is a symbolic link to no file (dangling, or to a folder); "
+                                   "point it at your file, or delete it for a fresh stub")
             elif not stat.S_ISREG(st.st_mode):
                 res.refused.append(f"{f.path}: it is a {'symbolic link' if stat.S_ISLNK(st.st_mode) else 'special file or folder'}")
             elif f.user:

@@ -26,10 +26,10 @@ _RESERVED = set(BUILTIN_TYPES) | set(BUILTIN_FUNCS) | set(MATH_FUNCS) | CONVERSI
 RESERVED_NAMES = frozenset(_RESERVED)
 
 
-# What `NAME.attr` reads instead of a status field called `attr`: a
-# supervisor's view of its subordinate (docs/language.md §9.4) and a
-# scenario's view of a controller (docs/scenarios.md) are looked up before
-# the status fields, so such a field is never seen there (W0101).
+# What `NAME.attr` reads instead of a status field or value called `attr`
+# (W0101): a supervisor's view of its subordinate (docs/language.md §9.4)
+# and a scenario's view of a controller (docs/scenarios.md) look these up
+# before the status fields, so such a field is never seen there...
 _SUPERVISOR_AND_SCENARIO = "its supervisor or a scenario"
 _BUILT_IN_VIEW: dict[str, tuple[str, str]] = {
     "done": (_SUPERVISOR_AND_SCENARIO, "whether its plan has finished"),
@@ -38,10 +38,11 @@ _BUILT_IN_VIEW: dict[str, tuple[str, str]] = {
     "error_code": (_SUPERVISOR_AND_SCENARIO, "the code of its last `error(...)`"),
     "age": ("its supervisor", "the age of the status the supervisor reads"),
     "echo": ("a scenario", "the serial number of the last command it took"),
-    "status": ("a scenario", "its status value"),
-    "state": ("a scenario", "its plan's current state"),
-    "rule": ("a scenario", "the rule that fired last"),
-    "verb": ("a scenario", "the verb it executes"),
+}
+# ... and a scenario reads these as the field, except in a comparison with a
+# name (`X.state == S1`), which compares the built-in: one name, two meanings.
+_SCENARIO_SYMBOLS: dict[str, str] = {
+    "status": "its status value", "state": "its plan's current state", "rule": "the rule that fired last", "verb": "the verb it executes",
 }
 
 
@@ -362,7 +363,12 @@ class _Sema:
             if n in c.status_fields or n in c.locals:
                 self.d.add("E0101", decl.name.span, f"`{n}` is defined more than once in `{name}`", f"repeated {what}")
                 continue
-            if table is c.status_fields:
+            if table is c.status_fields and n in c.statuses:
+                # `C.homed` would name both; readers take the status value.
+                self.d.add("E0101", decl.name.span, f"`{n}` is both a status value (`reports {n}`) and a status field of `{name}`",
+                           "repeated status name").with_label(c.status_spans[n], "the status value").with_note(
+                    f"`{name}.{n}` names either; a supervisor and a scenario would read the status value, never the field")
+            elif table is c.status_fields:
                 self._shadowed_status(name, decl.name, "status field")
             t = self.type_ref(decl.type)
             var = m.Var(n, t, decl.span, range=self.range_of(decl.type, t, checker), doc=_doc(decl))
@@ -378,13 +384,17 @@ class _Sema:
     def _shadowed_status(self, controller: str, ident: ast.Ident, what: str) -> None:
         """W0101 for a status field or an extra status value that its readers
         cannot see: `SUB.done` is the built-in, whatever `SUB` declares."""
-        if ident.name not in _BUILT_IN_VIEW:
-            return
-        who, means = _BUILT_IN_VIEW[ident.name]
-        self.d.add("W0101", ident.span, f"{what} `{ident.name}` cannot be read by {who}", "named like a built-in status").with_note(
-            f"`{controller}.{ident.name}` reads {means}, not this {what}"
-        ).with_help(f"give it a name of its own, such as `{ident.name}_value`" if what == "status field"
-                    else f"give it a name of its own, such as `{ident.name.upper()}`")
+        n = ident.name
+        rename = f"give it a name of its own, such as `{n}_value`" if what == "status field" else f"give it a name of its own, such as `{n.upper()}`"
+        if n in _BUILT_IN_VIEW:
+            who, means = _BUILT_IN_VIEW[n]
+            self.d.add("W0101", ident.span, f"{what} `{n}` cannot be read by {who}", "named like a built-in status").with_note(
+                f"`{controller}.{n}` reads {means}, not this {what}").with_help(rename)
+        elif n in _SCENARIO_SYMBOLS:
+            self.d.add("W0101", ident.span, f"{what} `{n}` has the name of a scenario's built-in `{controller}.{n}`",
+                       "named like a built-in status").with_note(
+                f"a scenario reads `{controller}.{n}` as this {what}, but `{controller}.{n} == NAME` compares {_SCENARIO_SYMBOLS[n]}"
+            ).with_help(rename)
 
     def _single(self, values, item: ast.Controller, what: str, get, span_of):
         if not values and item.placeholder:  # an instance that could not be made: reported
