@@ -360,11 +360,17 @@ def test_editing_an_open_module_rechecks_the_open_design_that_imports_it(client:
     assert "E0100" not in [d.get("code") for d in client.diagnostics(duri)]
     muri = _open(client, tmp_path / "lib" / "m.rcs", module)
     client.diagnostics(muri)
+    # Opening the module checks the design again (its text is the file's here).
+    assert "E0100" not in [d.get("code") for d in client.diagnostics(duri)]
     client.notify("textDocument/didChange", {"textDocument": {"uri": muri, "version": 2},
                                              "contentChanges": [{"text": "module m\nconst K2: f64 = 1.0\n"}]})
     assert "E0100" in [d.get("code") for d in client.diagnostics(duri)]
     client.notify("textDocument/didClose", {"textDocument": {"uri": muri}})
     assert "E0100" not in [d.get("code") for d in client.diagnostics(duri)]
+    # Opened again with unsaved text the editor restored: the design reads that text.
+    client.notify("textDocument/didOpen", {"textDocument": {"uri": muri, "languageId": "rcs", "version": 3,
+                                                            "text": "module m\nconst K3: f64 = 1.0\n"}})
+    assert "E0100" in [d.get("code") for d in client.diagnostics(duri)]
     assert client.close() == 0
 
 

@@ -333,6 +333,10 @@ def make_server() -> RcsServer:
     @server.feature(lsp.TEXT_DOCUMENT_DID_OPEN)
     def did_open(ls: RcsServer, params: lsp.DidOpenTextDocumentParams) -> None:
         ls.check(params.text_document.uri)
+        # A module opened with unsaved text (restored by the editor) changes
+        # what the open designs importing it read.
+        for uri in ls.dependents(params.text_document.uri):
+            ls.schedule(uri, 0)
 
     @server.feature(lsp.TEXT_DOCUMENT_DID_CHANGE)
     def did_change(ls: RcsServer, params: lsp.DidChangeTextDocumentParams) -> None:
