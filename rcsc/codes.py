@@ -747,7 +747,8 @@ list wraps around its type (`+`, `-`, `*` on i32, i64, u32 or durations), or
 `/` or `%` divides by zero, which gives 0 by the language's rules. Either is
 rarely what the designer meant. Bound the operands with a range or a test in
 the condition, or use a wider type. Arithmetic of constants that certainly
-wraps or divides by zero (`2147483647 + 1`, `MAX_COUNT * 1000000`, `1 / 0`)
+wraps or divides by zero (`2147483647 + 1`, `MAX_COUNT * 1000000`, `1 / 0`,
+`abs(i32 MIN)`, a `sum` of constants)
 is reported where it is written, in constants and initial values too, with
 the value it was meant to have and the one it gets.
 

@@ -222,6 +222,18 @@ class Checker:
             if id(e.operand) in self._wrapped:
                 return True
             exact = -e.operand.value
+        elif (isinstance(e, m.Call) and e.kind == "builtin" and e.func in ("abs", "sum") and len(e.args) == 1
+              and isinstance(e.args[0], m.Const)):
+            # `abs(i32 MIN)` and a `sum` of constants wrap as `-` and `+` do.
+            if id(e.args[0]) in self._wrapped:
+                return True
+            v = e.args[0].value
+            if e.func == "abs" and isinstance(v, int) and not isinstance(v, bool):
+                exact = abs(v)
+            elif e.func == "sum" and isinstance(v, list) and v and all(isinstance(x, int) and not isinstance(x, bool) for x in v):
+                exact = sum(v)
+            else:
+                return False
         else:
             return False
         if exact is None or exact == value:
