@@ -961,9 +961,9 @@ def _fmt_stdin(args: argparse.Namespace) -> int:
 
     raw = sys.stdin.buffer.read() if hasattr(sys.stdin, "buffer") else sys.stdin.read().encode("utf-8", "surrogateescape")
     try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        _error(f"<stdin>: cannot read: not UTF-8 text (byte {exc.start})")
+        text = safeio.decode_text(raw)
+    except safeio.InputError as exc:
+        _error(f"<stdin>: cannot read: {exc}")
         return EXIT_USAGE
     formatted, diags = fmt.format_source("<stdin>", text)
     if formatted is None:

@@ -140,22 +140,21 @@ def _gm_path(e: ast.Expr) -> list[ast.Ident] | None:
     return None
 
 
+def _walk(x):
+    """The syntax nodes in `x` (a node or a list of them), in order, `x` first."""
+    if isinstance(x, list):
+        for y in x:
+            yield from _walk(y)
+    elif isinstance(x, ast.Node):
+        yield x
+        for f in dataclasses.fields(x):
+            if f.name != "span":
+                yield from _walk(getattr(x, f.name))
+
+
 def _memory_read(value: ast.Expr, gm) -> ast.Name | None:
     """The first name of a variable (`gm`: its names) in a value parameter's argument."""
-    if isinstance(value, ast.Name):
-        return value if value.name in gm else None
-    for f in dataclasses.fields(value):
-        if f.name == "span":
-            continue
-        x = getattr(value, f.name)
-        for y in x if isinstance(x, list) else [x]:
-            if isinstance(y, ast.Arg):
-                y = y.value
-            if isinstance(y, ast.Expr):
-                found = _memory_read(y, gm)
-                if found is not None:
-                    return found
-    return None
+    return next((n for n in _walk(value) if isinstance(n, ast.Name) and n.name in gm), None)
 
 
 def _memory_argument(p: ast.Param, value: ast.Expr, variables: dict[str, str], what: str, diags: Diagnostics) -> bool:
@@ -176,13 +175,7 @@ def _memory_argument(p: ast.Param, value: ast.Expr, variables: dict[str, str], w
 
 
 def _has_int_literal(x) -> bool:
-    if isinstance(x, ast.IntLit):
-        return True
-    if isinstance(x, list):
-        return any(_has_int_literal(y) for y in x)
-    if isinstance(x, ast.Node):
-        return any(_has_int_literal(getattr(x, f.name)) for f in dataclasses.fields(x) if f.name != "span")
-    return False
+    return any(isinstance(n, ast.IntLit) for n in _walk(x))
 
 
 def _typed(value: ast.Expr, t: ast.TypeRef | None) -> ast.Expr:

@@ -41,9 +41,9 @@ def _read(path: str) -> str:
     except safeio.InputError as exc:
         raise InputError(str(exc)) from exc
     try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as exc:  # the wording of `safeio.read_text`
-        raise InputError(f"{path}: not UTF-8 text (byte {exc.start})") from exc
+        return safeio.decode_text(data)
+    except safeio.InputError as exc:
+        raise InputError(f"{path}: {exc}") from exc
 
 
 def stdlib_path(module: str):

@@ -79,25 +79,35 @@ def _note(what: str, st: os.stat_result, path: str) -> None:
         _seen.setdefault((st.st_dev, st.st_ino), (what, path))
 
 
+def _note_file(what: str, path: str) -> None:
+    """Remember `path` if it is a regular file (a device such as /dev/null
+    may take any number of reports, and is no one's input)."""
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return
+    if stat.S_ISREG(st.st_mode):
+        _note(what, st, path)
+
+
 def claim_inputs(paths: Iterable[str]) -> None:
     """Count the regular files among `paths` as inputs of this command."""
     for path in paths:
-        try:
-            st = os.stat(path)
-        except (OSError, ValueError):
-            continue
-        if stat.S_ISREG(st.st_mode):
-            _note("input", st, path)
+        _note_file("input", path)
 
 
-def read_text(path: str, limit: int = MAX_INPUT) -> str:
-    """`read_input` decoded as UTF-8; a file that is not UTF-8 text is an
-    InputError that says where (`not UTF-8 text (byte 9)`)."""
-    data = read_input(path, limit)
+def decode_text(data: bytes) -> str:
+    """`data` as UTF-8 text; otherwise an InputError that says where
+    (`not UTF-8 text (byte 9)`), the wording of every input."""
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise InputError(f"not UTF-8 text (byte {exc.start})") from exc
+
+
+def read_text(path: str, limit: int = MAX_INPUT) -> str:
+    """`read_input` decoded as UTF-8 (`decode_text`)."""
+    return decode_text(read_input(path, limit))
 
 
 def _refuse_seen(path: str) -> None:
@@ -206,18 +216,7 @@ def write_report(path: str, data: bytes) -> None:
     already wrote another report to it (`command_files`)."""
     _refuse_seen(path)
     write_file(path, data)
-    _note_report(path)
-
-
-def _note_report(path: str) -> None:
-    """Remember a report written to a regular file (a device such as
-    /dev/null may take any number of reports)."""
-    try:
-        st = os.stat(path)
-    except OSError:
-        return
-    if stat.S_ISREG(st.st_mode):
-        _note("report", st, path)
+    _note_file("report", path)
 
 
 def _umask() -> int:

@@ -58,6 +58,15 @@ def _owner(designs: list[str], scenario: str) -> str | None:
     return max(claiming, key=lambda d: len(_stem(d))) if claiming else None
 
 
+def _scenario_files(folder: str) -> list[str]:
+    """The `*.scn` files beside a design in `folder` and in `folder/scenarios`."""
+    found = []
+    for where in (folder, os.path.join(folder, "scenarios")):
+        if os.path.isdir(where):
+            found += [os.path.join(where, f) for f in sorted(os.listdir(where)) if f.endswith(".scn")]
+    return found
+
+
 def _designs_in(folder: str) -> list[str]:
     return [os.path.join(folder, f) for f in sorted(os.listdir(folder)) if is_design_file(os.path.join(folder, f))]
 
@@ -71,11 +80,7 @@ def scenarios_of(design_path: str) -> list[str]:
     if os.path.isdir(folder):
         others = [d for d in _designs_in(folder) if os.path.basename(d) != os.path.basename(design_path)]
         designs += others
-    found = []
-    for where in (folder, os.path.join(folder, "scenarios")):
-        if os.path.isdir(where):
-            found += [os.path.join(where, f) for f in sorted(os.listdir(where)) if f.endswith(".scn")]
-    return [s for s in found if _owner(designs, s) is designs[0]]
+    return [s for s in _scenario_files(folder) if _owner(designs, s) is designs[0]]
 
 
 def design_of(scenario_path: str) -> str | None:
@@ -110,13 +115,10 @@ def discover(paths: list[str]) -> tuple[list[tuple[str, list[str]]], list[str]]:
                     plan.setdefault(full, []).extend(mine)
                     claimed.update(mine)
                 if len(designs) > 1:  # with one design every scenario beside it is its own
-                    for where in (root, os.path.join(root, "scenarios")):
-                        if os.path.isdir(where):
-                            orphans = [os.path.join(where, f) for f in sorted(os.listdir(where))
-                                       if f.endswith(".scn") and os.path.join(where, f) not in claimed]
-                            unclaimed += orphans
-                            problems += [f"{o}: no design beside it is named like `{_stem(o)}` (`NAME.rcs` owns `NAME.scn` and `NAME_*.scn`)"
-                                         for o in orphans]
+                    orphans = [s for s in _scenario_files(root) if s not in claimed]
+                    unclaimed += orphans
+                    problems += [f"{o}: no design beside it is named like `{_stem(o)}` (`NAME.rcs` owns `NAME.scn` and `NAME_*.scn`)"
+                                 for o in orphans]
         elif p.endswith(".scn") and os.path.isfile(p):
             d = design_of(p)
             if d is None:
