@@ -16,6 +16,7 @@ Contract with CI (docs/ci.md):
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 from collections.abc import Callable
@@ -66,6 +67,43 @@ def _emit_report(text: str, output: str | None) -> None:
         safeio.write_report(output, text.encode("utf-8"))
     except OSError as exc:
         raise UsageError(f"cannot write `{output}`: {exc.strerror or exc}") from exc
+
+
+def _report_out(files: contextlib.ExitStack, output: str | None) -> Callable[[str], None]:
+    """A function that writes text to `output` (a report file, replaced as a
+    whole when `files` closes without error; `safeio.report_stream`) or to
+    stdout."""
+    if output is None:
+        return lambda text: _write(sys.stdout, text)
+    raw = files.enter_context(_report_file(output))
+
+    def write(text: str) -> None:
+        try:
+            raw.write(text.encode("utf-8"))
+        except OSError as exc:
+            raise UsageError(f"cannot write `{output}`: {exc.strerror or exc}") from exc
+
+    return write
+
+
+@contextlib.contextmanager
+def _report_file(output: str):
+    """`safeio.report_stream`, its failures (refused, disk full) a usage error naming the file."""
+    try:
+        with safeio.report_stream(output) as raw:
+            yield raw
+    except OSError as exc:
+        raise UsageError(f"cannot write `{output}`: {exc.strerror or exc}") from exc
+
+
+class _StepLog:
+    """`rcsc sim --step-log`: the simulator's step lines, written as they come."""
+
+    def __init__(self, out: Callable[[str], None]) -> None:
+        self.out = out
+
+    def append(self, line: str) -> None:
+        self.out(line + "\n")
 
 
 def _use_color(choice: str, output: str | None, stream=None) -> bool:
@@ -466,7 +504,7 @@ def _checked_scenario(design_path: str, scenario_path: str):
 def _run_sim(args: argparse.Namespace) -> int:
     from rcsc.sim import externs as sim_externs
     from rcsc.sim import trace
-    from rcsc.sim.runner import run_scenario
+    from rcsc.sim.runner import RunResult, ScenarioRun
 
     loaded = _checked_scenario(args.path, args.scenario)
     if loaded is None:
@@ -480,29 +518,34 @@ def _run_sim(args: argparse.Namespace) -> int:
             _report_to_stderr(diags)
         if externs is None:
             return EXIT_FINDINGS
-    steps: list[str] | None = [] if args.step_log else None
+    fmt = args.trace_format
+    if fmt is None:
+        suffix = (args.output or "").rsplit(".", 1)[-1].lower()
+        fmt = suffix if suffix in TRACE_FORMATS else "jsonl"
+    # The trace and the step log are written as the run makes them, so a
+    # scenario of any length runs in constant memory.  Several CPUs: the
+    # JSON-lines trace has one line per CPU cycle; CSV and VCD show the
+    # observer's view (what expectations see) per base tick.
     try:
-        run = run_scenario(design, sc, externs=externs, step_log=steps)
+        with contextlib.ExitStack() as files:
+            out = _report_out(files, args.output)
+            steps = _StepLog(_report_out(files, args.step_log)) if args.step_log else None
+            run = ScenarioRun(design, sc, externs=externs, step_log=steps)
+            if fmt == "jsonl":
+                chunks = trace.jsonl_chunks(design, (rec for t in run.ticks() for rec in t.ran))
+            elif fmt == "csv":
+                chunks = trace.csv_chunks(design, ((t.view, t.last) for t in run.ticks()))
+            else:
+                chunks = trace.vcd_chunks(design, ((t.view, t.last) for t in run.ticks()), design.base_tick_ns)
+            for chunk in chunks:
+                out(chunk)
     except sim_externs.ExternCallError as exc:
         diags = Diagnostics()
         exc.report(diags)
         _report_to_stderr(diags)
         return EXIT_FINDINGS
-    if steps is not None:
-        _emit_report("".join(x + "\n" for x in steps), args.step_log)
-    fmt = args.trace_format
-    if fmt is None:
-        suffix = (args.output or "").rsplit(".", 1)[-1].lower()
-        fmt = suffix if suffix in TRACE_FORMATS else "jsonl"
-    # Several CPUs: the JSON-lines trace has one line per CPU cycle; CSV and
-    # VCD show the observer's view (what expectations see) per base tick.
-    if fmt == "jsonl":
-        text = trace.run_to_jsonl(design, run)
-    elif fmt == "csv":
-        text = trace.to_csv(design, run.snapshots)
-    else:
-        text = trace.to_vcd(design, run.snapshots, design.base_tick_ns)
-    _emit_report(text, args.output)
+    assert run.results is not None
+    run = RunResult(sc, [], run.results, multi_cpu=run.multi)
     if not run.passed:
         from rcsc.sim.testrun import failure_text
 

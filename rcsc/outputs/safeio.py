@@ -38,6 +38,7 @@ import signal
 import stat
 import tempfile
 from collections.abc import Callable, Iterable, Iterator
+from typing import BinaryIO
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
@@ -183,6 +184,17 @@ def write_file(
     written through like a shell redirection, and a regular file is
     replaced atomically.
     """
+    with open_atomic(path, may_replace, mode) as out:
+        out.write(data)
+
+
+@contextmanager
+def open_atomic(
+    path: str, may_replace: Callable[[str], bool] | None = None, mode: int | None = None
+) -> Iterator[BinaryIO]:
+    """A binary file to write `path` through, as `write_file` writes it: the
+    data go to a temporary file that replaces `path` when the block ends
+    normally, and is removed if it raises (the old file stays whole)."""
     directory = os.path.dirname(path) or "."
     if os.path.lexists(path):
         st = os.lstat(path)
@@ -196,13 +208,13 @@ def write_file(
             # `-o /dev/stdout`, a FIFO, a link they made) is written through,
             # as a shell redirection would: renaming a file over it would
             # replace the device or the link itself.
-            with open(path, "wb") as out:
-                out.write(data)
+            with open(path, "wb") as through:
+                yield through
             return
     fd, tmp = tempfile.mkstemp(prefix=".rcsc-", suffix=".tmp", dir=directory)
     try:
         with os.fdopen(fd, "wb") as out:
-            out.write(data)
+            yield out
         os.chmod(tmp, (0o666 & ~_umask()) if mode is None else mode)
         os.replace(tmp, path)
     except BaseException:
@@ -214,9 +226,39 @@ def write_report(path: str, data: bytes) -> None:
     """Write a report to the file a person named (`-o`, `--step-log`,
     `--junit`), as `write_file` does, unless this command read that file or
     already wrote another report to it (`command_files`)."""
+    with report_stream(path) as out:
+        out.write(data)
+
+
+@contextmanager
+def report_stream(path: str) -> Iterator[BinaryIO]:
+    """`write_report` for a report written as it is made (a long run's
+    trace, which need not be whole in memory): the same refusals, the same
+    atomic replacement when the block ends.  Two reports of one command to
+    one file are refused even while both are being written."""
     _refuse_seen(path)
-    write_file(path, data)
+    try:
+        special = not stat.S_ISREG(os.stat(path).st_mode)
+    except (OSError, ValueError):
+        special = False  # nothing there yet
+    key = "" if special else os.path.realpath(path)  # a device takes any number of reports
+    if key and key in _writing:
+        first = _writing[key]
+        same = "" if os.path.normpath(first) == os.path.normpath(path) else f" (`{first}`)"
+        raise FileExistsError(f"this command already wrote another report to it{same}")
+    if key:
+        _writing[key] = path
+    try:
+        with open_atomic(path) as out:
+            yield out
+    finally:
+        _writing.pop(key, None)
     _note_file("report", path)
+
+
+# The reports being written at this moment, by real path (a report that is
+# still a temporary file has no device and inode to compare yet).
+_writing: dict[str, str] = {}
 
 
 def _umask() -> int:

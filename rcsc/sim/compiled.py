@@ -24,7 +24,7 @@ from rcsc.outputs import backend
 from rcsc.outputs.events import event_text
 from rcsc.semantics import model as m
 from rcsc.semantics.types import ArrayType, FloatType, RecordType, Type
-from rcsc.sim.runner import RunResult, evaluate_expectation
+from rcsc.sim.runner import RunResult, evaluate_expectations
 from rcsc.sim.trace import CtrlSnapshot, Snapshot
 
 RUN_TIMEOUT = 600.0
@@ -197,5 +197,5 @@ def run_compiled(design: m.Design, sc: Scenario, b: Build, work: Path) -> RunRes
         snaps = snapshots(design, sc, lines, b.multi)
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise CompiledError(f"the program's trace is unreadable: {exc}") from exc
-    results = [evaluate_expectation(design, x, snaps) for x in sc.expects]
+    results = evaluate_expectations(design, sc.expects, snaps)
     return RunResult(sc, snaps, results, multi_cpu=b.multi)

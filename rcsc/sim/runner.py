@@ -11,9 +11,9 @@ writer's CPU, inputs as the scenario last set them).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from rcsc.semantics import model as m
 from rcsc.semantics.evaluate import Env, eval_expr
@@ -121,20 +121,79 @@ def _holds(design: m.Design, snap: Snapshot, e: m.Expr) -> bool:
     return bool(eval_expr(e, ObserverEnv(design, snap)))
 
 
-def evaluate_expectation(design: m.Design, x: Expectation, snaps: list[Snapshot]) -> ExpectResult:
-    by_cycle = {s.cycle: s for s in snaps}
-    if x.kind in ("at", "final"):
-        snap = by_cycle[x.lo] if x.kind == "at" else snaps[-1]
-        return ExpectResult(x, _holds(design, snap, x.cond), snap.cycle, _values(design, snap, x.cond))
-    if x.kind == "within":
-        for c in range(x.lo, x.hi + 1):
-            if _holds(design, by_cycle[c], x.cond):
-                return ExpectResult(x, True, c, _values(design, by_cycle[c], x.cond))
-        return ExpectResult(x, False, x.hi, _values(design, by_cycle[x.hi], x.cond))
-    for snap in snaps:  # always
-        if not _holds(design, snap, x.cond):
-            return ExpectResult(x, False, snap.cycle, _values(design, snap, x.cond))
-    return ExpectResult(x, True, snaps[-1].cycle, [])
+class Expectations:
+    """A scenario's expectations, decided as the run goes (`see` each view in
+    tick order, then `results`), so that a run keeps no history: a soak
+    scenario of millions of ticks takes as little memory as a short one.
+
+    A view may stand for a span of ticks (`first`..`last`) in which nothing
+    ran (every CPU stopped): each tick of the span sees the same values.
+    """
+
+    def __init__(self, design: m.Design, expects: list[Expectation]) -> None:
+        self.design = design
+        self.expects = expects
+        self._decided: dict[int, ExpectResult] = {}
+        self._open = list(range(len(expects)))  # not decided yet
+        self._last: tuple[Snapshot, int] | None = None
+
+    def see(self, snap: Snapshot, last: int | None = None) -> None:
+        """Observe `snap` at its tick (`snap.cycle`) and, with `last`, at every tick up to `last`."""
+        first = snap.cycle
+        last = first if last is None else last
+        still = []
+        for i in self._open:
+            x = self.expects[i]
+            result = self._decide(x, snap, first, last)
+            if result is None:
+                still.append(i)
+            else:
+                self._decided[i] = result
+        self._open = still
+        self._last = (snap, last)
+
+    def _decide(self, x: Expectation, snap: Snapshot, first: int, last: int) -> ExpectResult | None:
+        if x.kind == "at":
+            if first <= x.lo <= last:
+                return ExpectResult(x, _holds(self.design, snap, x.cond), x.lo, _values(self.design, snap, x.cond))
+            return None
+        if x.kind == "within":
+            if last < x.lo or first > x.hi:
+                return None
+            if _holds(self.design, snap, x.cond):
+                return ExpectResult(x, True, max(first, x.lo), _values(self.design, snap, x.cond))
+            if x.hi <= last:
+                return ExpectResult(x, False, x.hi, _values(self.design, snap, x.cond))
+            return None
+        if x.kind == "always" and not _holds(self.design, snap, x.cond):
+            return ExpectResult(x, False, first, _values(self.design, snap, x.cond))
+        return None  # `final`, and `always` while it holds: decided at the end
+
+    def results(self) -> list[ExpectResult]:
+        """Every expectation's result, in the scenario's order (after the last view)."""
+        if self._last is None:
+            raise ValueError("no tick was observed")
+        snap, last = self._last
+        out = []
+        for i, x in enumerate(self.expects):
+            r = self._decided.get(i)
+            if r is None:
+                if x.kind == "final":
+                    r = ExpectResult(x, _holds(self.design, snap, x.cond), last, _values(self.design, snap, x.cond))
+                elif x.kind == "always":
+                    r = ExpectResult(x, True, last, [])
+                else:
+                    raise ValueError(f"the run ended at tick {last}, before the expectation's ticks")
+            out.append(r)
+        return out
+
+
+def evaluate_expectations(design: m.Design, expects: list[Expectation], snaps: list[Snapshot]) -> list[ExpectResult]:
+    """The expectations' results over one view per tick (`snaps`, in tick order)."""
+    ex = Expectations(design, expects)
+    for snap in snaps:
+        ex.see(snap)
+    return ex.results()
 
 
 def events_at(sc: Scenario, tick: int, instant: int):
@@ -150,18 +209,33 @@ def events_at(sc: Scenario, tick: int, instant: int):
             yield Event(instant, f.kind, f.name)
 
 
-def drive(system: System, sc: Scenario):
-    """Run `sc`'s ticks on `system`, yielding each tick after it ran (its events posted first)."""
+def drive(system: System, sc: Scenario) -> Iterator[tuple[int, int]]:
+    """Run `sc`'s ticks on `system`, yielding (first, last) after each tick ran
+    (its events posted first).
+
+    Once every CPU has stopped nothing can change but the scenario's inputs,
+    so the ticks up to the next one with an event are not stepped one by
+    one: `last` is then the last tick of that quiet span, whose ticks all
+    look like `first` (an hour-long scenario after a total stop costs one
+    step, not a million)."""
     by_tick: dict[int, list] = {}
-    for tick in range(1, sc.cycles + 1):
-        by_tick[tick] = []
     for tick in sorted({x.cycle for x in [*sc.inputs, *sc.commands, *sc.faults]}):
         by_tick[tick] = list(events_at(sc, tick, (tick - 1) * system.base_ns))
-    for tick in range(1, sc.cycles + 1):
-        for ev in by_tick[tick]:
+    ahead = sorted(by_tick)
+    k = 0
+    tick = 1
+    while tick <= sc.cycles:
+        for ev in by_tick.get(tick, ()):
             system.post(ev)
         system.tick()
-        yield tick
+        while k < len(ahead) and ahead[k] <= tick:
+            k += 1
+        last = tick
+        if len(system.stopped) == len(system.cpus):
+            last = min(ahead[k] - 1 if k < len(ahead) else sc.cycles, sc.cycles)
+        yield tick, last
+        system.tick_count = last  # the quiet ticks: nothing to step
+        tick = last + 1
 
 
 def observe(system: System) -> Snapshot:
@@ -173,29 +247,85 @@ def observe(system: System) -> Snapshot:
     return observed_snapshot(system)
 
 
-def run_scenario(design: m.Design, sc: Scenario, externs: dict | Callable[[], dict] | None = None,
-                 step_log: list[str] | None = None) -> RunResult:
-    """Runs `sc`; with `step_log`, appends a line per step to it (Simulator.step_log).
+@dataclass
+class Tick:
+    """One step of a run: what expectations see at ticks `view.cycle`..`last`
+    (one tick, or a quiet span after every CPU stopped), and the trace's
+    records of the cycles that ran at the first of them (`Snapshot`s on one
+    CPU, `CpuSnapshot`s with several)."""
+
+    view: Snapshot
+    last: int
+    ran: list
+
+
+class ScenarioRun:
+    """A scenario run as a stream of `Tick`s (`ticks()`), its expectations
+    decided on the way (`results` once the ticks are through).  Nothing is
+    kept behind the current tick, so `rcsc sim` and `rcsc test` run
+    scenarios of any length in constant memory; `run_scenario` keeps it all.
 
     `externs` implements the design's extern functions (name -> Python
     callable taking and returning simulator values); an extern without one
     returns its type's zero value, as the targets' stubs do.  With several
     CPUs, pass a function that makes the dictionary: it is called once per
     CPU, so that an extern that keeps state keeps it per CPU, as in the
-    compiled programs (one process per CPU)."""
-    system = System(design, externs)
-    if step_log is not None:
-        for sim in system.cpus.values():
-            sim.step_log = step_log
+    compiled programs (one process per CPU).  `step_log` gets a line per
+    controller step (`Simulator.step_log`): a list, or anything with `append`."""
+
+    def __init__(self, design: m.Design, sc: Scenario, externs: dict | Callable[[], dict] | None = None,
+                 step_log=None) -> None:
+        self.design = design
+        self.scenario = sc
+        self.system = System(design, externs)
+        if step_log is not None:
+            for sim in self.system.cpus.values():
+                sim.step_log = step_log
+        self.multi = len(self.system.cpus) > 1
+        self._expectations = Expectations(design, sc.expects)
+        self.results: list[ExpectResult] | None = None
+
+    def ticks(self) -> Iterator[Tick]:
+        system = self.system
+        for _, last in drive(system, self.scenario):
+            view = observe(system)
+            if self.multi:
+                ran: list = [cpu_snapshot(system, cpu) for cpu, _ in system.ran]
+            else:
+                ran = [view] if system.ran else []
+            self._expectations.see(view, last)
+            yield Tick(view, last, ran)
+        self.results = self._expectations.results()
+
+    def run(self) -> RunResult:
+        """Run to the end keeping nothing but the expectations' results."""
+        for _ in self.ticks():
+            pass
+        assert self.results is not None
+        return RunResult(self.scenario, [], self.results, multi_cpu=self.multi)
+
+
+def run_scenario(design: m.Design, sc: Scenario, externs: dict | Callable[[], dict] | None = None,
+                 step_log: list[str] | None = None) -> RunResult:
+    """Runs `sc` and keeps every tick's view and every cycle's trace record
+    (see `ScenarioRun` for the arguments; the differential tester and the
+    tests compare them)."""
+    run = ScenarioRun(design, sc, externs, step_log)
     snaps: list[Snapshot] = []
     cycles: list[CpuSnapshot] = []
     ran: list[Snapshot] = []
-    multi = len(system.cpus) > 1
-    for _ in drive(system, sc):
-        snaps.append(observe(system))
-        if multi:
-            cycles.extend(cpu_snapshot(system, cpu) for cpu, _ in system.ran)
-        elif system.ran:
-            ran.append(snaps[-1])
-    results = [evaluate_expectation(design, x, snaps) for x in sc.expects]
-    return RunResult(sc, snaps, results, cycles, ran, multi)
+    for t in run.ticks():
+        snaps.extend(spread(t.view, t.last))
+        if run.multi:
+            cycles.extend(t.ran)
+        else:
+            ran.extend(t.ran)
+    assert run.results is not None
+    return RunResult(sc, snaps, run.results, cycles, ran, run.multi)
+
+
+def spread(view: Snapshot, last: int) -> Iterator[Snapshot]:
+    """One view per tick of `view.cycle`..`last` (they share their values)."""
+    yield view
+    for k in range(view.cycle + 1, last + 1):
+        yield replace(view, cycle=k)

@@ -18,7 +18,7 @@ from rcsc.outputs import safeio
 from rcsc.diagnostics import Diagnostics
 from rcsc.driver import check_path
 from rcsc.front.loader import InputError
-from rcsc.sim.runner import RunResult, run_scenario
+from rcsc.sim.runner import RunResult, ScenarioRun
 from rcsc.front.scenario import text_to_scenario
 from rcsc.front.source import SourceFile
 
@@ -226,7 +226,7 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict, target: st
             design_cache[("externs shown", design_path)] = True
             notes = loading
         try:
-            result = run_scenario(checked.model, sc, externs=made)
+            result = ScenarioRun(checked.model, sc, externs=made).run()  # keeps no history: any length
         except sim_externs.ExternCallError as exc:
             failed = Diagnostics()
             exc.report(failed)
