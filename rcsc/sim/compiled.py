@@ -14,6 +14,7 @@ import hashlib
 import json
 import os
 import subprocess
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,7 +25,7 @@ from rcsc.outputs import backend
 from rcsc.outputs.events import event_text
 from rcsc.semantics import model as m
 from rcsc.semantics.types import ArrayType, FloatType, RecordType, Type
-from rcsc.sim.runner import RunResult, evaluate_expectations
+from rcsc.sim.runner import Expectations, RunResult
 from rcsc.sim.trace import CtrlSnapshot, Snapshot
 
 RUN_TIMEOUT = 600.0
@@ -121,24 +122,34 @@ def _ctrl(design: m.Design, name: str, s: dict) -> CtrlSnapshot:
 
 
 def snapshots(design: m.Design, sc: Scenario, lines: list[dict], multi: bool) -> list[Snapshot]:
-    """What the expectations see at each tick 1..cycles, rebuilt from the program's trace.
+    """`views` as a list (the differential tester compares them with the simulator's)."""
+    return list(views(design, sc, lines, multi))
+
+
+def views(design: m.Design, sc: Scenario, lines: Iterable[dict], multi: bool) -> Iterator[Snapshot]:
+    """What the expectations see at each tick 1..cycles, rebuilt from the
+    program's trace as it is read (a long run's trace need not be whole in
+    memory; its lines come in time order, as the simulator's do).
 
     One CPU: the line of the tick (after a `stop`, the last one).  Several
     CPUs: at tick N (instant (N-1) * base tick) each controller's status and
     each Global Memory variable as its CPU's latest cycle released by then
     left them (a variable: on its writer's CPU), inputs as the scenario last
     set them, the rest at its initial value."""
-    out: list[Snapshot] = []
+    pending = iter(lines)
+    ahead: dict | None = next(pending, None)
     if not multi:
-        by_cycle = {x["cycle"]: x for x in lines}
         last = None
         for tick in range(1, sc.cycles + 1):
-            last = by_cycle.get(tick, last)
+            while ahead is not None and ahead["cycle"] <= tick:
+                if ahead["cycle"] == tick:
+                    last = ahead
+                ahead = next(pending, None)
             if last is None:
                 raise CompiledError(f"the trace has no line for cycle {tick}")
             gm = {n: _value(last["gm"][n], v.type) for n, v in design.gm.items()}
-            out.append(Snapshot(tick, gm, {n: _ctrl(design, n, last["ctrl"][n]) for n in design.controllers}))
-        return out
+            yield Snapshot(tick, gm, {n: _ctrl(design, n, last["ctrl"][n]) for n in design.controllers})
+        return
     writer: dict[str, str] = {}
     for c in design.controllers.values():
         for use in c.writes:
@@ -146,15 +157,18 @@ def snapshots(design: m.Design, sc: Scenario, lines: list[dict], multi: bool) ->
                 writer.setdefault(use.name, c.cpu)
     base = design.base_tick_ns
     latest: dict[str, dict] = {}
-    pending = sorted(lines, key=lambda x: x["t"])
     env = {n: v.init for n, v in design.gm.items() if v.from_env}
     inputs = sorted(sc.inputs, key=lambda i: i.cycle)
-    k = j = 0
+    j = 0
+    seen_t = 0
     for tick in range(1, sc.cycles + 1):
         instant = (tick - 1) * base
-        while k < len(pending) and pending[k]["t"] <= instant:
-            latest[pending[k]["cpu"]] = pending[k]
-            k += 1
+        while ahead is not None and ahead["t"] <= instant:
+            if ahead["t"] < seen_t:
+                raise CompiledError(f"the trace goes back in time (t = {ahead['t']} after {seen_t})")
+            seen_t = ahead["t"]
+            latest[ahead["cpu"]] = ahead
+            ahead = next(pending, None)
         while j < len(inputs) and inputs[j].cycle <= tick:
             env[inputs[j].var] = inputs[j].value
             j += 1
@@ -173,8 +187,7 @@ def snapshots(design: m.Design, sc: Scenario, lines: list[dict], multi: bool) ->
             if cpu not in latest:
                 raise CompiledError(f"the trace has no cycle of CPU {cpu} by tick {tick}")
             ctrls[n] = _ctrl(design, n, latest[cpu]["ctrl"][n])
-        out.append(Snapshot(tick, gm, ctrls))
-    return out
+        yield Snapshot(tick, gm, ctrls)
 
 
 def run_compiled(design: m.Design, sc: Scenario, b: Build, work: Path) -> RunResult:
@@ -192,10 +205,11 @@ def run_compiled(design: m.Design, sc: Scenario, b: Build, work: Path) -> RunRes
         raise CompiledError(f"the program ran for more than {RUN_TIMEOUT:.0f} s") from exc
     if r.returncode != 0:
         raise CompiledError(f"the program exited with status {r.returncode}:\n{r.stderr[-3000:]}")
+    expectations = Expectations(design, sc.expects)
     try:
-        lines = read_trace(trace.read_text(encoding="utf-8"))
-        snaps = snapshots(design, sc, lines, b.multi)
+        with trace.open(encoding="utf-8") as f:
+            for view in views(design, sc, (json.loads(x, parse_int=_trace_int) for x in f), b.multi):
+                expectations.see(view)
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise CompiledError(f"the program's trace is unreadable: {exc}") from exc
-    results = evaluate_expectations(design, sc.expects, snaps)
-    return RunResult(sc, snaps, results, multi_cpu=b.multi)
+    return RunResult(sc, [], expectations.results(), multi_cpu=b.multi)
