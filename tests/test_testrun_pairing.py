@@ -14,6 +14,7 @@ from rcsc.cli import main
 from rcsc.sim.testrun import design_of, discover, scenarios_of
 
 ROOT = Path(__file__).resolve().parent.parent
+SUBMARINE = ROOT / "examples/submarine/submarine.rcs"
 MC = ROOT / "tests" / "mc"
 
 
@@ -54,3 +55,27 @@ def test_rcsc_test_runs_each_scenario_once_against_its_design(tmp_path: Path, ca
     assert main(["test", str(two)]) == 0
     out = capsys.readouterr().out
     assert out.count("PASS ") == 4 and out.endswith("4 passed, 0 failed\n"), out
+
+
+def test_a_scenario_kept_elsewhere_runs_on_the_design_named_with_it(tmp_path: Path) -> None:
+    """`rcsc test plant.rcs soak/long.scn`: the scenario has no design beside
+    it, and exactly one design is named, so it runs on that one (with the
+    design's own scenarios); with no design or two named it is reported."""
+    plant = tmp_path / "plant"
+    plant.mkdir()
+    design = plant / "submarine.rcs"
+    design.write_text(SUBMARINE.read_text(encoding="utf-8"), encoding="utf-8")
+    (plant / "init.scn").write_text("cycles 12\nat 1: SM.INIT()\nexpect within 1..12: SM.done\n", encoding="utf-8")
+    soak = tmp_path / "soak"
+    soak.mkdir()
+    far = soak / "far.scn"
+    far.write_text("cycles 12\nat 1: SM.INIT()\nexpect at 2: SM.done\n", encoding="utf-8")
+    found, problems = discover([str(design), str(far)])
+    assert problems == [] and found == [(str(design), sorted([str(plant / "init.scn"), str(far)]))]
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "o.rcs").write_text(SUBMARINE.read_text(encoding="utf-8"), encoding="utf-8")
+    for paths in ([str(far)], [str(design), str(other / "o.rcs"), str(far)]):
+        found, problems = discover(paths)
+        assert all(str(far) not in ss for _, ss in found)
+        assert len(problems) == 1 and "no design for it" in problems[0] and "rcsc test DESIGN.rcs" in problems[0]

@@ -104,6 +104,10 @@ def discover(paths: list[str]) -> tuple[list[tuple[str, list[str]]], list[str]]:
     plan: dict[str, list[str]] = {}
     problems: list[str] = []
     unclaimed: list[str] = []  # scenarios beside several designs that none of them claims
+    # A scenario with no design of its own runs on the design named with it
+    # (`rcsc test plant.rcs soak/long.scn`), when exactly one is named.
+    named = [p for p in paths if not p.endswith(".scn") and os.path.isfile(p)]
+    named_design = named[0] if len(named) == 1 else None
     for p in paths:
         if os.path.isdir(p):
             for root, dirs, files in os.walk(p):
@@ -120,10 +124,11 @@ def discover(paths: list[str]) -> tuple[list[tuple[str, list[str]]], list[str]]:
                     problems += [f"{o}: no design beside it is named like `{_stem(o)}` (`NAME.rcs` owns `NAME.scn` and `NAME_*.scn`)"
                                  for o in orphans]
         elif p.endswith(".scn") and os.path.isfile(p):
-            d = design_of(p)
+            d = design_of(p) or named_design
             if d is None:
                 problems.append(f"{p}: no design for it: no design file beside it or in the folder above, "
-                                f"or several and none named like `{_stem(p)}` (`NAME.rcs` owns `NAME.scn` and `NAME_*.scn`)")
+                                f"or several and none named like `{_stem(p)}` (`NAME.rcs` owns `NAME.scn` and `NAME_*.scn`); "
+                                f"name the design with it: `rcsc test DESIGN.rcs {p}`")
             else:
                 plan.setdefault(d, []).append(p)
         elif os.path.isfile(p):
