@@ -408,3 +408,28 @@ def test_a_lone_surrogate_in_the_document_still_gets_its_findings(client: Client
     found = client.diagnostics(uri, timeout=30)
     assert any(d.get("code") == "E0002" for d in found), found
     assert client.close() == 0
+
+
+def test_the_server_keeps_its_documents_to_itself() -> None:
+    """rcsc's protocol makes documents with the protocol's line ends
+    (`_Document`) without changing pygls for other servers in the process:
+    pygls' protocol module still makes pygls' own workspace."""
+    import pygls.protocol.language_server as protocol_module
+    from pygls.workspace import Workspace
+
+    from rcsc.editor import lsp as rcs_lsp
+
+    server = rcs_lsp.make_server()
+    assert protocol_module.Workspace is Workspace
+    protocol = server.protocol
+    protocol._workspace = Workspace("file:///tmp", position_encoding="utf-16")
+    ws = protocol.workspace
+    assert isinstance(ws, rcs_lsp._Workspace) and ws.root_uri == "file:///tmp"
+    ws.put_text_document(_text_document("file:///tmp/a.rcs", "a\x0cb\nc"))
+    assert list(ws.get_text_document("file:///tmp/a.rcs").lines) == ["a\x0cb\n", "c"]
+
+
+def _text_document(uri: str, text: str):
+    from lsprotocol import types as lsp_types
+
+    return lsp_types.TextDocumentItem(uri=uri, language_id="rcs", version=1, text=text)

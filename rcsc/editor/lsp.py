@@ -30,6 +30,7 @@ from urllib.parse import unquote, urlparse
 
 from lsprotocol import types as lsp
 from pygls.lsp.server import LanguageServer
+from pygls.protocol import LanguageServerProtocol
 from pygls.workspace import TextDocument, Workspace
 
 import rcsc
@@ -97,6 +98,26 @@ class _Workspace(Workspace):
                          sync_kind=self._sync_kind, position_codec=self._position_codec)
 
 
+class _Protocol(LanguageServerProtocol):
+    """pygls' protocol, whose workspace makes `_Document`s.
+
+    The protocol makes its `Workspace` itself when the editor initializes
+    the session, and stores it in `_workspace`; this property turns the one
+    it stores into a `_Workspace` with the same root, folders, sync kind and
+    position encoding.  Only this server's protocol is concerned: other
+    pygls servers in the process keep pygls' own documents."""
+
+    @property  # type: ignore[override]
+    def _workspace(self) -> Workspace | None:
+        return self.__dict__.get("_rcs_workspace")
+
+    @_workspace.setter
+    def _workspace(self, ws: Workspace | None) -> None:
+        if ws is not None and not isinstance(ws, _Workspace):
+            ws = _Workspace(ws.root_uri, ws._sync_kind, list(ws.folders.values()), ws.position_encoding)
+        self.__dict__["_rcs_workspace"] = ws
+
+
 def uri_to_path(uri: str) -> str:
     parsed = urlparse(uri)
     return unquote(parsed.path) if parsed.scheme == "file" else uri
@@ -141,7 +162,7 @@ class RcsServer(LanguageServer):
     """The server and its state: the last check of each open document."""
 
     def __init__(self) -> None:
-        super().__init__("rcsc", rcsc.__version__)
+        super().__init__("rcsc", rcsc.__version__, protocol_cls=_Protocol)
         self.pending: dict[str, asyncio.Task] = {}
         self.indexes: dict[str, symbols.Index] = {}  # uri -> index of its design
         self.sources: dict[str, SourceFile] = {}  # uri -> the text the index was built from
@@ -324,12 +345,6 @@ class RcsServer(LanguageServer):
 
 def make_server() -> RcsServer:
     server = RcsServer()
-    # The protocol makes its Workspace on `initialize` by this module-level
-    # name: ours makes documents with the protocol's line ends (`_Document`).
-    import pygls.protocol.language_server as protocol_module
-
-    protocol_module.Workspace = _Workspace
-
     @server.feature(lsp.TEXT_DOCUMENT_DID_OPEN)
     def did_open(ls: RcsServer, params: lsp.DidOpenTextDocumentParams) -> None:
         ls.check(params.text_document.uri)
