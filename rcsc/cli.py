@@ -483,18 +483,19 @@ def _checked_scenario(design_path: str, scenario_path: str):
     """The checked design and its parsed scenario (`rcsc sim`, `rcsc events`);
     None after reporting the findings that stop either."""
     from rcsc.front.scenario import text_to_scenario
-    from rcsc.front.source import SourceFile
 
     result = _check(design_path)
     if not result.ok or result.model is None:
         _report_to_stderr(result.diags)
         return None
-    try:
-        text = safeio.read_text(scenario_path)
-    except OSError as exc:
-        raise UsageError(f"{scenario_path}: cannot read: {getattr(exc, 'strerror', None) or exc}") from exc
+    from rcsc.front.loader import InputError, read_source
+
     diags = Diagnostics()
-    sc = text_to_scenario(SourceFile(scenario_path, text), result.model, diags)
+    try:
+        source, utf8 = read_source(scenario_path, diags)
+    except (OSError, InputError) as exc:
+        raise UsageError(f"{scenario_path}: cannot read: {getattr(exc, 'strerror', None) or exc}") from exc
+    sc = text_to_scenario(source, result.model, diags) if utf8 else None
     if sc is None:
         _report_to_stderr(diags)
         return None

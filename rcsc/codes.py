@@ -86,6 +86,14 @@ wrong type, or a diagnostic code that does not exist. The keys are `select`,
 Only warnings can be ignored or have their severity changed: an error means
 the design is wrong whatever a report shows.
 """),
+    ("E0010", _E, "file is not UTF-8 text", """
+rcsc reads designs, modules, scenarios and the configuration as UTF-8. The
+file has a byte that is not UTF-8 (often a file saved as Latin-1 or
+Windows-1252: an accented letter in a comment is enough); the finding points
+at the first one, shown as `\ufffd`. Nothing else of the file is checked, as
+the rest could be read wrong. Save the file as UTF-8 (for example with
+`iconv -f latin1 -t utf-8 old.rcs > new.rcs`).
+"""),
     ("W0008", _W, "malformed or unused suppression", """
 A comment `// rcsc: allow(CODE) reason` suppresses the CODE findings that start
 on its line (or, when it stands alone on its line, on the next line). It must

@@ -117,7 +117,9 @@ def _has_tool_table(path: str) -> bool:
     import tomllib
 
     try:
-        text = safeio.read_text(path)
+        # A file of another encoding counts when it names the table: `load`
+        # then reports where it is not UTF-8.
+        text = safeio.decode_lossy(safeio.read_input(path))[0]
     except OSError:
         return False
     try:
@@ -143,12 +145,15 @@ def load(path: str, in_pyproject: bool, diags: Diagnostics) -> Config:
     import tomllib
 
     config = Config(root=os.path.dirname(os.path.abspath(path)) or ".", path=path)
+    from rcsc.front.loader import InputError, read_source
+
     try:
-        text = safeio.read_text(path)
-    except OSError as exc:
+        source, utf8 = read_source(path, diags)
+    except (OSError, InputError) as exc:
         diags.add("E0009", None, f"cannot read the configuration `{path}`: {getattr(exc, 'strerror', None) or exc}")
         return config
-    source = SourceFile(path, text)
+    if not utf8:
+        return config  # E0010 points at the byte
     try:
         doc = tomllib.loads(source.text)
     except tomllib.TOMLDecodeError as exc:

@@ -90,7 +90,7 @@ def _case_files(root: Path) -> list[Path]:
 
 def _annotations(path: Path) -> list[tuple[str, int, int]]:
     out = []
-    for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+    for n, line in enumerate(path.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
         if "expect:" not in line:
             continue
         mt = _EXPECT.search(line)

@@ -16,8 +16,8 @@ process with `rcsc.cli.main(['check', FILE, '--format', 'json'])`:
     flip operators, extreme numbers, truncate).
 
 For every input: `main` returns (no exception escapes), the exit code is 0, 1
-or 2, exit code 2 only for a file that is not UTF-8 (never an "internal
-compiler error"), stdout is one JSON document whose summary matches its
+(never 2, and never an "internal compiler error"; a file that is not UTF-8
+is one E0010 finding), stdout is one JSON document whose summary matches its
 diagnostics and the exit code, and every diagnostic (and every secondary
 label) has a file, a line and a column inside that file.
 
@@ -179,17 +179,17 @@ def check_input(family: str, data: str | bytes, name: str = "fuzz.rcs", describe
     assert rc != "escaped", f"{context}: an exception escaped main():\n{err}"
     assert "internal compiler error" not in err, f"{context}: crashed (exit {rc}):\n{err}"
     assert rc in (0, 1, 2), f"{context}: exit code {rc!r}\n{err}"
-    if rc == 2:
-        # the only exit 2 a readable file may give: it is not UTF-8
-        assert not _is_utf8(raw), f"{context}: exit 2 for a UTF-8 file:\n{err}"
-        assert "not UTF-8" in err, f"{context}: exit 2 without the not-UTF-8 message:\n{err}"
-        return
+    # A readable file is never a usage error: one that is not UTF-8 is E0010 at its first bad byte.
+    assert rc != 2, f"{context}: exit 2 for a readable file:\n{err}"
     try:
         doc = json.loads(out)
     except ValueError as exc:
         raise AssertionError(f"{context}: stdout is not JSON ({exc}):\n{out[:2000]}\n{err}") from exc
     assert isinstance(doc, dict) and isinstance(doc.get("diagnostics"), list), f"{context}: bad document {out[:500]}"
-    texts = {str(path): raw.decode("utf-8")}
+    texts = {str(path): raw.decode("utf-8", "replace")}
+    if not _is_utf8(raw):
+        codes = [d.get("code") for d in doc["diagnostics"]]
+        assert codes == ["E0010"], f"{context}: not UTF-8, found {codes}"
     errors = warnings = 0
     for i, d in enumerate(doc["diagnostics"]):
         where = f"{context}: diagnostic {i} {d.get('code')} {d.get('message')!r}"

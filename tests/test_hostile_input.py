@@ -136,3 +136,60 @@ def test_control_characters_quoted_in_a_finding_are_escaped(tmp_path: Path, caps
     out = capsys.readouterr().out
     assert "cannot read `a\\x1b[2Jb.rcs`" in out
     assert "\x1b" not in out
+
+
+def test_a_file_of_another_encoding_is_e0010_at_its_first_bad_byte(tmp_path: Path, capsys) -> None:
+    """A design, an imported module, a scenario or a configuration saved as
+    Latin-1 is one E0010 finding that points at the byte (line, column, the
+    byte's value), exit 1: it used to be a bare "not UTF-8 text (byte N)"
+    usage error without a span (the root, scenarios, rcsc.toml), an E0003 at
+    the import, or, in a pyproject.toml, a configuration silently ignored."""
+    design = tmp_path / "d.rcs"
+    design.write_bytes(b"design d\n// caf\xe9 au lait\nconst K: i32 = 1\n")
+    assert main(["check", str(design)]) == 1
+    err = "".join(capsys.readouterr())
+    assert f"error[E0010]: this file is not UTF-8 text\n --> {design}:2:7\n" in err
+    assert "byte 0xe9 is not UTF-8" in err and "at byte 15 of the file" in err
+
+    folder = tmp_path / "imp"
+    folder.mkdir()
+    (folder / "m.rcs").write_bytes(b"module m\nconst K: i32 = 1 // \xff\n")
+    (folder / "d.rcs").write_text('design d\nimport "m.rcs"\n', encoding="utf-8")
+    assert main(["check", "--format", "json", str(folder / "d.rcs")]) == 1
+    out = capsys.readouterr().out
+    assert '"code": "E0010"' in out and '"line": 2' in out and "E0003" not in out
+
+    sub = tmp_path / "sub"
+    sub.mkdir()
+    (sub / "submarine.rcs").write_text(SUBMARINE.read_text(encoding="utf-8"), encoding="utf-8")
+    scn = sub / "s.scn"
+    scn.write_bytes(b"cycles 3\n// \xe9\n")
+    assert main(["sim", str(sub / "submarine.rcs"), "--scenario", str(scn)]) == 1
+    assert f" --> {scn}:2:4\n" in "".join(capsys.readouterr())
+    assert main(["test", str(scn)]) == 1
+    assert f"{scn}:2:4: error[E0010]: this file is not UTF-8 text" in "".join(capsys.readouterr())
+
+    for name, text in (("rcsc.toml", b'ignore = ["W0403"] # caf\xe9\n'),
+                       ("pyproject.toml", b'[tool.rcsc]\nignore = ["W0403"] # caf\xe9\n')):
+        cfg = tmp_path / name.replace(".", "_")
+        cfg.mkdir()
+        (cfg / "submarine.rcs").write_text(SUBMARINE.read_text(encoding="utf-8"), encoding="utf-8")
+        (cfg / name).write_bytes(text)
+        assert main(["check", str(cfg / "submarine.rcs")]) == 1, name
+        err = "".join(capsys.readouterr())
+        line = text.count(b"\n")
+        assert "error[E0010]" in err and f"{name}:{line}:25" in err, err
+
+
+def test_rcsc_test_finds_a_design_cut_through_a_character_at_64_kib(tmp_path: Path, capsys) -> None:
+    """Discovery reads a file's first 64 KiB for its `design` header: a
+    character cut at that boundary made the file "not a design", and
+    `rcsc test` on the folder ran nothing."""
+    text = SUBMARINE.read_text(encoding="utf-8")
+    pad = 65536 - len(text.encode("utf-8")) - 1
+    assert pad > 0
+    (tmp_path / "submarine.rcs").write_text(text + "//" + "x" * (pad - 2) + "é\n", encoding="utf-8")
+    assert (tmp_path / "submarine.rcs").read_bytes()[65535:65537] == "é".encode("utf-8")
+    (tmp_path / "s.scn").write_text("cycles 3\nat 1: SM.INIT()\n", encoding="utf-8")
+    assert main(["test", str(tmp_path)]) == 0
+    assert "1 passed, 0 failed" in capsys.readouterr().out

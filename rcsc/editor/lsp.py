@@ -7,7 +7,7 @@ typing after a short pause (a newer edit cancels the pending check).  A
 module is checked through the design that imports it (found as `rcsc check`
 finds it), with the unsaved texts of every open document; an edit of an open
 module checks again the open designs whose last check read it.  The
-configuration's own findings (E0009) are published on the configuration
+configuration's own findings (E0009, E0010) are published on the configuration
 file.  Only documents the editor opened are checked or answered for.
 
 Requests: hover (a name's declaration, a verb's signature, the explanation
@@ -272,7 +272,7 @@ class RcsServer(LanguageServer):
         return self.workspace.text_documents.get(unquote(uri))
 
     def publish_config(self, path: str, diags: Diagnostics) -> None:
-        """The configuration's own findings (E0009), on the configuration file,
+        """The configuration's own findings (E0009, E0010), on the configuration file,
         as `rcsc check` reports them there."""
         out = [lsp.Diagnostic(range=_range(d.span) if d.span is not None else lsp.Range(start=lsp.Position(line=0, character=0),
                                                                                       end=lsp.Position(line=0, character=0)),

@@ -35,15 +35,24 @@ class LoadedFile:
     real: str = ""
 
 
-def _read(path: str) -> str:
+def read_source(path: str, diags: Diagnostics, display: str | None = None) -> tuple[SourceFile, bool]:
+    """The file at `path` as a SourceFile shown as `display`, and whether it
+    is UTF-8 text.  A file that is not is still a source, with U+FFFD for
+    its bad bytes, and an E0010 finding points at the first one: a file of
+    another encoding is a mistake in the input, reported where it is, not a
+    file that cannot be read.  OSError (InputError for a special or huge
+    file) when it cannot be read at all."""
     try:
         data = safeio.read_input(path)
     except safeio.InputError as exc:
         raise InputError(str(exc)) from exc
-    try:
-        return safeio.decode_text(data)
-    except safeio.InputError as exc:
-        raise InputError(f"{path}: {exc}") from exc
+    text, bad, at = safeio.decode_lossy(data)
+    source = SourceFile(display or path, text)
+    if bad is not None:
+        diags.add("E0010", Span(source, bad, bad + 1), "this file is not UTF-8 text", f"byte 0x{data[at]:02x} is not UTF-8").with_note(
+            f"at byte {at} of the file; rcsc reads every file as UTF-8"
+        ).with_help("save the file as UTF-8 (from Latin-1, for example: `iconv -f latin1 -t utf-8`)")
+    return source, bad is None
 
 
 def stdlib_path(module: str):
@@ -71,10 +80,13 @@ def path_to_files(
     of the root text that the parser reads as blanks (see
     `rcsc.front.parse.text_to_ast`)."""
     overlay = overlay or {}
+    utf8 = True
     try:
         text = overlay.get(os.path.realpath(path))
         if text is None:
-            text = _read(path)
+            root, utf8 = read_source(path, diags)
+        else:
+            root = SourceFile(path, text)
     except FileNotFoundError as exc:
         raise InputError(f"{path}: no such file") from exc
     except IsADirectoryError as exc:
@@ -83,12 +95,14 @@ def path_to_files(
         raise InputError(f"{path}: {exc.strerror or exc}") from exc
 
     root_dir = os.path.realpath(os.path.dirname(os.path.abspath(path)))
-    root = SourceFile(path, text)
     files: list[LoadedFile] = []
     seen: set[str] = set()
 
-    def visit(source: SourceFile, real: str, is_root: bool, display_dir: str | None) -> None:
+    def visit(source: SourceFile, real: str, is_root: bool, display_dir: str | None, utf8: bool = True) -> None:
         seen.add(real)
+        if not utf8:  # E0010 is reported; the rest would be read wrong
+            files.append(LoadedFile(source, None, "", is_root, real))
+            return
         tree = text_to_ast(source, diags, root_holes if is_root else None)
         module = ""
         if tree is not None:
@@ -127,8 +141,9 @@ def path_to_files(
             return
         if real in seen:
             return
+        display = os.path.normpath(os.path.join(display_dir, target))
         try:
-            text = overlay[real] if real in overlay else _read(real)
+            source, utf8 = (SourceFile(display, overlay[real]), True) if real in overlay else read_source(real, diags, display)
         except InputError as exc:
             diags.add("E0003", _target_span(item), f"cannot read `{target}`: {exc}", "imported here")
             return
@@ -136,8 +151,7 @@ def path_to_files(
             reason = (exc.strerror or "no such file").lower()
             diags.add("E0003", _target_span(item), f"cannot read `{target}`: {reason}", "imported here")
             return
-        display = os.path.normpath(os.path.join(display_dir, target))
-        visit(SourceFile(display, text), real, False, os.path.dirname(display))
+        visit(source, real, False, os.path.dirname(display), utf8)
 
     def _import_std(item: ast.Import) -> None:
         res = stdlib_path(item.target)
@@ -153,7 +167,7 @@ def path_to_files(
         visit(SourceFile("<stdlib>/" + item.target.replace(".", "/") + ".rcs", text), key, False, None)
 
     try:
-        visit(root, os.path.realpath(path), True, os.path.dirname(path))
+        visit(root, os.path.realpath(path), True, os.path.dirname(path), utf8)
     finally:
         # `visit` and the import readers call each other through this
         # frame's cells: a cycle that would keep `files` (every syntax tree)

@@ -106,6 +106,18 @@ def decode_text(data: bytes) -> str:
         raise InputError(f"not UTF-8 text (byte {exc.start})") from exc
 
 
+def decode_lossy(data: bytes) -> tuple[str, int | None, int]:
+    """`data` as text with each byte that is not UTF-8 shown as U+FFFD, the
+    text offset of the first such byte (None when all of it is UTF-8) and
+    that byte's offset in `data`: what a finding that points at the byte
+    needs (E0010)."""
+    try:
+        return data.decode("utf-8"), None, 0
+    except UnicodeDecodeError as exc:
+        # The bytes before the first bad one are UTF-8 by definition.
+        return data.decode("utf-8", "replace"), len(data[: exc.start].decode("utf-8")), exc.start
+
+
 def read_text(path: str, limit: int = MAX_INPUT) -> str:
     """`read_input` decoded as UTF-8 (`decode_text`)."""
     return decode_text(read_input(path, limit))

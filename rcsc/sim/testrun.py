@@ -17,10 +17,9 @@ from xml.sax.saxutils import escape, quoteattr
 from rcsc.outputs import safeio
 from rcsc.diagnostics import Diagnostics
 from rcsc.driver import check_path
-from rcsc.front.loader import InputError
+from rcsc.front.loader import InputError, read_source
 from rcsc.sim.runner import RunResult, ScenarioRun
 from rcsc.front.scenario import text_to_scenario
-from rcsc.front.source import SourceFile
 
 _DESIGN_HEADER = re.compile(r"\A(?:\s|//[^\n]*\n|/\*.*?\*/)*design\s", re.S)
 
@@ -30,9 +29,12 @@ def is_design_file(path: str) -> bool:
         return False
     # Only regular files: a FIFO or device in a design folder must not block
     # or flood the discovery (read_input opens without blocking).
+    # The header is ASCII: a cut through a character at the end of the first
+    # 64 KiB, or a file of another encoding (reported as E0010 when it is
+    # checked), is still a design file.
     try:
-        head = safeio.read_input(path)[:65536].decode("utf-8")
-    except (OSError, UnicodeDecodeError):
+        head = safeio.read_input(path)[:65536].decode("utf-8", "replace")
+    except OSError:
         return False
     return bool(_DESIGN_HEADER.match(head))
 
@@ -210,10 +212,10 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict, target: st
         return Outcome(design_path, scenario_path, False, 0.0, message="the design has errors (run `rcsc check`)", diags=checked.diags)
     diags = Diagnostics()
     try:
-        text = safeio.read_text(scenario_path)
-    except OSError as exc:
-        return Outcome(design_path, scenario_path, False, 0.0, message=f"cannot read the scenario: {exc}")
-    sc = text_to_scenario(SourceFile(scenario_path, text), checked.model, diags)
+        source, utf8 = read_source(scenario_path, diags)
+    except (OSError, InputError) as exc:
+        return Outcome(design_path, scenario_path, False, 0.0, message=f"cannot read the scenario: {getattr(exc, 'strerror', None) or exc}")
+    sc = text_to_scenario(source, checked.model, diags) if utf8 else None
     if sc is None:
         return Outcome(design_path, scenario_path, False, 0.0, message="the scenario has errors", diags=diags)
     notes = None
