@@ -805,6 +805,13 @@ def _run_graph(args: argparse.Namespace) -> int:
     if fmt == "png" and args.output is None and getattr(sys.stdout, "isatty", lambda: False)():
         raise UsageError("PNG is binary: give `-o FILE.png` (or pipe stdout to a file)")
     view = args.view or ("plan" if args.plan or args.controller else "hierarchy")
+    if view != "plan":
+        # Options of the plan view given with another view would be ignored
+        # without a word, and the user would get a graph they did not ask for.
+        given = [flag for flag, value in (("--controller", args.controller), ("--plan", args.plan), ("--compact", args.compact)) if value]
+        if given:
+            verb = "applies" if len(given) == 1 else "apply"
+            raise UsageError(f"{', '.join(f'`{g}`' for g in given)} only {verb} to `--view plan`, not `--view {view}`")
     try:
         g = graph.select_graph(result.model, view, args.controller, args.plan, result.diags.sorted(), args.compact)
         data = graph.output_bytes(g, fmt)

@@ -424,3 +424,16 @@ def test_python_m_rcsc_graph() -> None:
     assert proc.returncode in (0, 1), proc.stderr  # 1: the example has error findings (drawn anyway)
     assert proc.stdout.startswith(f"%% {graph.BANNER}\n")
     assert "Traceback" not in proc.stderr
+
+
+def test_plan_options_with_another_view_are_refused(capsys: pytest.CaptureFixture[str]) -> None:
+    """`--plan`, `--controller` and `--compact` draw nothing in the hierarchy
+    or data-flow view: given there they are a usage error, not ignored."""
+    path = str(EXAMPLES["submarine"])
+    assert cli.main(["graph", path, "--view", "hierarchy", "--plan", "AHEAD"]) == 2
+    assert "error: `--plan` only applies to `--view plan`, not `--view hierarchy`" in capsys.readouterr().err
+    assert cli.main(["graph", path, "--view", "dataflow", "--controller", "PR", "--compact"]) == 2
+    assert "`--controller`, `--compact` only apply to `--view plan`, not `--view dataflow`" in capsys.readouterr().err
+    assert cli.main(["graph", path, "--compact"]) == 2  # the default view is the hierarchy
+    capsys.readouterr()
+    assert cli.main(["graph", path, "--controller", "PR", "--plan", "AHEAD", "--compact"]) in DRAWN
