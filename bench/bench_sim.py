@@ -30,6 +30,12 @@ stepping loop (`System.tick`: `Simulator.begin_cycle` + `run_cycle`).  Front-end
 
 If the submarine run misses its goal (or with --profile), the hottest
 functions of the run are printed from cProfile.
+
+3. long runs: `rcsc test` and `rcsc sim -o` (JSON-lines trace) of the
+   submarine watch stretched to 20,000 and 200,000 cycles (30 min and
+   100 min of ship time), each in a fresh process: CPU seconds and peak
+   resident memory.  A run keeps no history (rcsc.sim.runner.ScenarioRun),
+   so the goal is the memory of the long run within 1.2 x the short one's.
 """
 
 from __future__ import annotations
@@ -203,6 +209,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--syn-cycles", type=int, default=1_000, help="cycles of the synthetic run (default 1000)")
     ap.add_argument("--synthetic", nargs=3, type=int, metavar=("N", "P", "R"), default=(200, 20, 10), help="synthetic design size (default 200 20 10)")
     ap.add_argument("--skip-synthetic", action="store_true", help="only the submarine run")
+    ap.add_argument("--skip-long", action="store_true", help="skip the long runs' memory")
     ap.add_argument("--profile", action="store_true", help="print cProfile hotspots of every run")
     ap.add_argument("--top", type=int, default=20, help="hotspot lines to print (default 20)")
     args = ap.parse_args(argv)
@@ -214,7 +221,50 @@ def main(argv: list[str] | None = None) -> int:
         n, p, r = args.synthetic
         for line in bench_synthetic(n, p, r, args.syn_cycles, args.profile, args.top):
             print(line, flush=True)
+    if not args.skip_long:
+        for line in bench_long():
+            print(line, flush=True)
     return 0
+
+
+LONG_GOAL = 1.2
+
+
+def _child(argv: list[str]) -> tuple[float, float]:
+    """CPU seconds and peak RSS (MiB) of one command in a fresh process."""
+    import subprocess
+
+    # No cache: every run checks the design itself, so the runs compare.
+    env = dict(os.environ, RCSC_NO_CACHE="1")
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    _, _, usage = os.wait4(proc.pid, 0)
+    proc.returncode = 0
+    return usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024
+
+
+def bench_long() -> list[str]:
+    """`rcsc test` and `rcsc sim` on long runs: memory must not grow with the cycles."""
+    out = ["", f"{'long run (fresh process)':<44} {'cycles':>7} {'CPU s':>9} {'peak MiB':>9}"]
+    peaks: dict[tuple[str, int], float] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        (folder / "submarine.rcs").write_text(SUBMARINE.read_text(encoding="utf-8"), encoding="utf-8")
+        for cycles in (20_000, 200_000):
+            scn = folder / f"soak_{cycles}.scn"
+            scn.write_text(SUB_SCENARIO.format(cycles=cycles), encoding="utf-8")
+            for what, argv in (
+                ("rcsc test", [sys.executable, "-m", "rcsc", "test", str(scn)]),
+                ("rcsc sim -o trace.jsonl", [sys.executable, "-m", "rcsc", "sim", str(folder / "submarine.rcs"),
+                                             "--scenario", str(scn), "-o", str(folder / "trace.jsonl")]),
+            ):
+                cpu, peak = _child(argv)
+                peaks[(what, cycles)] = peak
+                out.append(f"{what:<44} {cycles:>7} {cpu:>9.2f} {peak:>9.0f}")
+    for what in ("rcsc test", "rcsc sim -o trace.jsonl"):
+        ratio = peaks[(what, 200_000)] / peaks[(what, 20_000)]
+        verdict = "met" if ratio <= LONG_GOAL else "MISSED"
+        out.append(f"{what}: peak memory at 200,000 cycles / at 20,000 = {ratio:.2f} (goal <= {LONG_GOAL}): {verdict}")
+    return out
 
 
 if __name__ == "__main__":
