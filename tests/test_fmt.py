@@ -23,7 +23,15 @@ from rcsc.front.parse import text_to_ast
 from rcsc.front.source import SourceFile, normalized
 
 ROOT = Path(__file__).resolve().parent.parent
-ALL_RCS = sorted(p for p in ROOT.rglob("*.rcs") if not any(part.startswith(".") for part in p.relative_to(ROOT).parts))
+def _utf8(path: Path) -> bool:
+    try:
+        path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        return False  # E0010's case (tests/cases/E0010_not_utf8): nothing to format
+    return True
+
+
+ALL_RCS = sorted(p for p in ROOT.rglob("*.rcs") if not any(part.startswith(".") for part in p.relative_to(ROOT).parts) and _utf8(p))
 _COMMENT = re.compile(r"//[^\n]*|/\*.*?\*/", re.S)
 
 
