@@ -93,3 +93,19 @@ def test_else_if_is_elif(tmp_path: Path) -> None:
     text = TYPOS.replace("    verb RUN\n", "    verb RUN\n    pre { if count > 0 { count = 1; } else if count < 0 { count = 2; } }\n")
     helps = _helps(tmp_path, text)
     assert [h[0] for h in helps.values()] == ["rcs writes `elif` for `else if`"], helps
+
+
+@pytest.mark.parametrize(
+    "target,first_help",
+    [
+        ("std.lifecycl", "did you mean `std.lifecycle`?"),
+        ("lifecycle", "did you mean `std.lifecycle`?"),
+        ("helpers", 'to import a file of the design, quote its path: `import "helpers.rcs"`'),
+    ],
+)
+def test_a_misspelt_module_gets_the_closest_one(tmp_path: Path, target: str, first_help: str) -> None:
+    helps = _helps(tmp_path, TYPOS.replace("design d\n", f"design d\nimport {target}\n"))
+    # The failed import is reported alone (the names of the module it meant
+    # would all be unknown).
+    assert list(helps) == [("E0005", target)], helps
+    assert helps[("E0005", target)][0] == first_help, helps

@@ -16,6 +16,7 @@ from importlib import resources
 from rcsc.outputs import safeio
 from rcsc.front import ast
 from rcsc.diagnostics import Diagnostics
+from rcsc.checks.hints import closest
 from rcsc.front.parse import text_to_ast
 from rcsc.front.source import SourceFile, Span, skip_trivia
 
@@ -142,9 +143,16 @@ def path_to_files(
     def _import_std(item: ast.Import) -> None:
         res = stdlib_path(item.target)
         if res is None:
-            diags.add("E0005", _target_span(item), f"no standard-library module `{item.target}`", "unknown module").with_note(
+            diag = diags.add("E0005", _target_span(item), f"no standard-library module `{item.target}`", "unknown module").with_note(
                 "the standard library has: " + ", ".join(stdlib_modules())
             )
+            best = closest(item.target, stdlib_modules())
+            if best is not None:
+                diag.with_help(f"did you mean `{best}`?")
+            if not item.target.startswith("std."):
+                # A bare name is read as a standard-library module; a file
+                # of the design is imported by its quoted path.
+                diag.with_help(f'to import a file of the design, quote its path: `import "{item.target.replace(".", "/")}.rcs"`')
             return
         key = "<stdlib>/" + item.target
         if key in seen:
