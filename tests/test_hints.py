@@ -109,3 +109,19 @@ def test_a_misspelt_module_gets_the_closest_one(tmp_path: Path, target: str, fir
     # would all be unknown).
     assert list(helps) == [("E0005", target)], helps
     assert helps[("E0005", target)][0] == first_help, helps
+
+
+def test_a_declared_name_out_of_reach_gets_no_guess(tmp_path: Path) -> None:
+    # `level_m` is declared: it is missing from the `reads`, and another
+    # name is no fix for that.
+    helps = _helps(tmp_path, TYPOS.replace("reads level_m, pos", "reads pos").replace("levl_m", "level_m"))
+    assert helps[("E0100", "level_m")] == ["add `reads level_m` to controller `TOP`"], helps
+
+
+@pytest.mark.parametrize("written,meant", [("LWO", "LOW"), ("LOWW", "LOW"), ("LO", "LOW")])
+def test_a_short_name_with_one_typo_gets_a_guess(tmp_path: Path, written: str, meant: str) -> None:
+    helps = _helps(tmp_path, TYPOS.replace("schedule TOP, LOW", f"schedule TOP, {written}"))
+    # The guess stands in for the name: LOW is not also "in no schedule".
+    assert ("E0104", written) in helps, helps
+    assert helps[("E0104", written)][0] == f"did you mean `{meant}`?", helps
+    assert not any(code == "E0603" for code, _ in helps), helps

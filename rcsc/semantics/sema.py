@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from rcsc.front import ast
 from rcsc.semantics import model as m
+from rcsc.checks.hints import closest
 from rcsc.diagnostics import Diagnostics
 from rcsc.front.instantiate import expand
 from rcsc.front.loader import LoadedFile
@@ -305,11 +306,17 @@ class _Sema:
         c.subordinates = self._names(item.subordinates, "subordinate")
         c.reads = self._names(item.reads, "read")
         c.writes = self._names(item.writes, "write")
-        for use in c.reads + c.writes:
-            if use.name not in self.g.gm:
+        for names in (c.reads, c.writes):
+            for i, use in enumerate(names):
+                if use.name in self.g.gm:
+                    continue
                 diag = self.d.add("E0100", use.span, f"no Global Memory variable named `{use.name}`", "not declared")
-                self.g.poisoned.add(use.name)
                 diag.with_help(f"declare it: `gm {use.name}: TYPE = VALUE`")
+                meant = _meant(use, self.g.gm, names)
+                if meant is None:
+                    self.g.poisoned.add(use.name)
+                else:
+                    names[i] = meant
         checker = Checker(Scope(self.g, const_only=True), self.d)
         for param, arg in item.param_args:  # a controller type's parameters are constants
             pt = self.type_ref(param.type)
@@ -570,14 +577,32 @@ class _Sema:
                         diag.with_label(first.span, f"first scheduled on `{name}`")
                         continue
                     schedule.append(m.NameUse(ident.name, ident.span))
-            for use in schedule:
+            for i, use in enumerate(schedule):
                 if use.name not in self.g.controllers:
                     self.d.add("E0104", use.span, f"no controller named `{use.name}`", "unknown controller")
+                    schedule[i] = _meant(use, self.g.controllers, schedule) or use
             schedule = [u for u in schedule if u.name in self.g.controllers]
             cpu = m.Cpu(name, item.span, item.name.span, hb.nanos if hb else 0, item.overhead[0].nanos if item.overhead else 0, schedule, doc=_doc(item))
             cpu.heartbeat_span = hb.span if hb else None
             out[name] = cpu
         return out
+
+
+def _meant(use: m.NameUse, declared, listed: list[m.NameUse]) -> m.NameUse | None:
+    """The declared name that an unknown one in a header list (`subordinates`,
+    `reads`, `writes`, `schedule`) most likely misspells, standing at its
+    place, or None.
+
+    The unknown name is reported once (with this guess as its "did you
+    mean", `rcsc.checks.hints`); the checks then go on as if the guess had
+    been written, so the uses of the meant name are not each reported as
+    "not a subordinate", "not in the `reads`" or "not in any schedule".  A
+    guess the list already holds is no guess: the list stays short of it.
+    """
+    best = closest(use.name, declared)
+    if best is None or any(u.name == best for u in listed):
+        return None
+    return m.NameUse(best, use.span)
 
 
 def ast_to_model(files: list[LoadedFile], diags: Diagnostics, release_plans: bool = False,
@@ -600,10 +625,15 @@ def ast_to_model(files: list[LoadedFile], diags: Diagnostics, release_plans: boo
     s.interfaces()
     for name_, item in s.decls.items():  # subordinates that are not controllers
         if isinstance(item, ast.Controller):
-            for use in s.g.controllers[name_].subordinates:
+            subs = s.g.controllers[name_].subordinates
+            for i, use in enumerate(subs):
                 if use.name not in s.g.controllers:
                     s.d.add("E0104", use.span, f"no controller named `{use.name}`", "unknown controller")
-                    s.g.poisoned.add(use.name)
+                    meant = _meant(use, (n for n in s.g.controllers if n != name_), subs)
+                    if meant is None:
+                        s.g.poisoned.add(use.name)
+                    else:
+                        subs[i] = meant
     for c in s.g.controllers.values():
         c.subordinates = [u for u in c.subordinates if u.name in s.g.controllers]
     s.bodies()
