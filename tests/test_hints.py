@@ -125,3 +125,21 @@ def test_a_short_name_with_one_typo_gets_a_guess(tmp_path: Path, written: str, m
     assert ("E0104", written) in helps, helps
     assert helps[("E0104", written)][0] == f"did you mean `{meant}`?", helps
     assert not any(code == "E0603" for code, _ in helps), helps
+
+
+@pytest.mark.parametrize(
+    "old,new,key,meant",
+    [
+        ("gm level_m: f64", "gm level_m: f46", ("E0102", "f46"), "f64"),
+        ("verb FILL_TO(mode: Mode)", "verb FILL_TO(mode: Mdoe)", ("E0102", "Mdoe"), "Mode"),
+        ("| new -> AT_LOAD | LOW.GOO();", "| new -> AT_LOAD | LOW.GO(spede = 1.0);", ("E0202", "spede"), "speed"),
+        ("    verb RUN\n", "    verb RUN\n    reports READY\n", ("E0107", "REDY"), "READY"),
+    ],
+)
+def test_misspelt_types_arguments_and_status_values(tmp_path: Path, old: str, new: str, key: tuple, meant: str) -> None:
+    text = TYPOS.replace(old, new).replace("verb GO\n", "verb GO(speed: f64)\n")
+    if key[0] == "E0107":
+        text = text.replace("E1: LOW.dne | AT_LOAD -> AT_UNLOAD;", "E1: LOW.dne | AT_LOAD -> AT_UNLOAD | report REDY;")
+    helps = _helps(tmp_path, text)
+    assert key in helps, sorted(helps)
+    assert helps[key][0] == f"did you mean `{meant}`?", helps[key]

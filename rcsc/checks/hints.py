@@ -81,6 +81,8 @@ def _controller_at(design: Design, d: Diagnostic):
 
 def _candidates(design: Design, d: Diagnostic) -> list[str]:
     quoted = _QUOTED.findall(d.message)
+    if d.code == "E0100" and d.message.startswith("no Global Memory variable"):
+        return list(design.gm)
     if d.code == "E0100":
         names = _scope_names(design)
         # E0100 also says that a declared name is out of reach (not in the

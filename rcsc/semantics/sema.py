@@ -148,6 +148,9 @@ class _Sema:
             return self._record(n)
         diag = self.d.add("E0102", ref.name.span, f"unknown type `{n}`", "not a type")
         diag.with_note("types: bool, i32, i64, u32, f64, duration, and declared enums and records")
+        best = closest(n, [*self.g.types, *self.record_ast])
+        if best is not None:
+            diag.with_help(f"did you mean `{best}`?")
         return ERROR
 
     def array_type(self, ref: ast.TypeRef) -> Type:
@@ -296,6 +299,9 @@ class _Sema:
         level, level_span = self._single(item.level, item, "level", lambda v: v[0], lambda v: v[1])
         budget, budget_span = self._single(item.budget, item, "budget", lambda v: v.nanos, lambda v: v.span)
         c = m.Controller(name, item.span, item.name.span, item.simulator, level or 0, budget or 0, doc=_doc(item))
+        if item.placeholder:
+            c.placeholder = True
+            self.g.poisoned.add(name)
         c.level_span, c.budget_span = level_span, budget_span
         # `period` is optional (default: every cycle of its CPU); the timing
         # check relates it to the CPU's heartbeat once the controller is placed.
@@ -312,11 +318,10 @@ class _Sema:
                     continue
                 diag = self.d.add("E0100", use.span, f"no Global Memory variable named `{use.name}`", "not declared")
                 diag.with_help(f"declare it: `gm {use.name}: TYPE = VALUE`")
-                meant = _meant(use, self.g.gm, names)
-                if meant is None:
-                    self.g.poisoned.add(use.name)
-                else:
-                    names[i] = meant
+                # Its uses are not reported again (an instance's body uses the
+                # name its argument gave); the name it likely means stands in.
+                self.g.poisoned.add(use.name)
+                names[i] = _meant(use, self.g.gm, names) or use
         checker = Checker(Scope(self.g, const_only=True), self.d)
         for param, arg in item.param_args:  # a controller type's parameters are constants
             pt = self.type_ref(param.type)
@@ -330,8 +335,14 @@ class _Sema:
         for ref in item.verb_sets:
             vs = self.verbsets.get(ref.name)
             if vs is None:
-                self.d.add("E0106", ref.span, f"no verb set named `{ref.name}`", "unknown verb set")
-                continue
+                diag = self.d.add("E0106", ref.span, f"no verb set named `{ref.name}`", "unknown verb set")
+                best = closest(ref.name, self.verbsets)
+                if best is None:
+                    continue
+                diag.with_help(f"did you mean `{best}`?")
+                # The meant set stands in, so its verbs' plans are not each
+                # "for a verb the controller does not declare".
+                ref, vs = ast.Ident(ref.span, best), self.verbsets[best]
             if ref.name in used_sets:  # one finding for the line, not one per verb
                 self.d.add("E0101", ref.span, f"verb set `{ref.name}` is used more than once in `{name}`", "repeated `verbs`")
                 continue

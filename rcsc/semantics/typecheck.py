@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 from rcsc.front import ast
 from rcsc.semantics import model as m
+from rcsc.checks.hints import closest
 from rcsc.diagnostics import Diagnostics
 from rcsc.semantics.evaluate import Env, NotConstant, eval_expr
 from rcsc.semantics.types import (
@@ -586,6 +587,8 @@ class Checker:
     def _sub_view(self, node: ast.Attr, sub: str, attr: str) -> m.Expr:
         c = self.s.controller
         assert c is not None
+        if sub in self.g.poisoned:
+            return m.Const(node.span, ERROR, 0)
         if sub == c.name:
             self.d.add("E0100", node.obj.span, "a controller cannot read its own status this way", "this controller").with_help(
                 "read its status fields by their bare names"
@@ -824,6 +827,9 @@ class Checker:
                     noun = "field" if what.startswith("record") else "parameter"
                     diag = self.d.add("E0202", a.name.span, f"{what} has no {noun} `{a.name.name}`", f"unknown {noun}")
                     diag.with_note("parameters: " + ", ".join(names) if names else f"{what} takes no arguments")
+                    best = closest(a.name.name, names)
+                    if best is not None:
+                        diag.with_help(f"did you mean `{best}`?")
                     ok = False
                     continue
                 k = names.index(a.name.name)
@@ -878,6 +884,9 @@ class Checker:
             assert c is not None
             if node.status.name not in c.statuses:
                 diag = self.d.add("E0107", node.status.span, f"`{c.name}` declares no status value `{node.status.name}`", "undeclared status")
+                best = closest(node.status.name, c.statuses)
+                if best is not None:
+                    diag.with_help(f"did you mean `{best}`?")
                 diag.with_help(f"declare it: `reports {node.status.name}`")
                 return None
             return m.Report(node.span, node.status.name)
