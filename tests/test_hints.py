@@ -143,3 +143,66 @@ def test_misspelt_types_arguments_and_status_values(tmp_path: Path, old: str, ne
     helps = _helps(tmp_path, text)
     assert key in helps, sorted(helps)
     assert helps[key][0] == f"did you mean `{meant}`?", helps[key]
+
+
+SCENARIO_DESIGN = """\
+design d
+const LIMIT: i32 = 3
+gm level_m: f64 = 0.0 from env
+controller TOP level 2 budget 1 ms {
+    subordinates LOW
+    reads level_m
+    status count: i32 = 0
+    verb FILL(speed: f64)
+    plan FILL {
+        E0: level_m > 1.0 | new -> FILLING | LOW.GO();
+        E3: otherwise     | new -> error(2);
+        E1: LOW.done | FILLING -> done;
+        E2: LOW.error | FILLING -> error(1);
+    }
+}
+controller LOW level 1 budget 1 ms {
+    verb GO
+    plan GO { E0: true | new -> done; }
+}
+cpu main {
+    heartbeat 10 ms
+    schedule TOP, LOW
+}
+"""
+
+
+@pytest.mark.parametrize(
+    "line,key,meant",
+    [
+        ("at 1: TPO.FILL(speed = 1.0)", ("E0104", "TPO"), "TOP"),
+        ("at 1: TOP.FIL(speed = 1.0)", ("E0105", "FIL"), "FILL"),
+        ("at 1: TOP.FILL(sped = 1.0)", ("E0202", "sped"), "speed"),
+        ("at 1: levl_m = 2.0", ("E0100", "levl_m"), "level_m"),
+        ("expect final: TOP.cont == 0", ("E0103", "cont"), "count"),
+        ("expect final: TOP.state == FILING", ("E0703", "FILING"), "FILLING"),
+        ("expect final: TOP.count < LIMT", ("E0100", "LIMT"), "LIMIT"),
+        ("expect final: TPO.state == FILLING", ("E0100", "TPO"), "TOP"),
+    ],
+)
+def test_misspelt_names_in_a_scenario(tmp_path: Path, line: str, key: tuple, meant: str) -> None:
+    from rcsc.diagnostics import Diagnostics
+    from rcsc.front.scenario import text_to_scenario
+    from rcsc.front.source import SourceFile
+
+    path = tmp_path / "d.rcs"
+    path.write_text(SCENARIO_DESIGN, encoding="utf-8")
+    result = check_path(str(path))
+    assert result.ok, [d.message for d in result.diags]
+    diags = Diagnostics()
+    text_to_scenario(SourceFile(str(tmp_path / "d.scn"), f"cycles 10\n{line}\n"), result.model, diags)
+    helps = {(d.code, d.span.text): d.helps for d in diags}
+    assert list(helps) == [key], helps
+    assert helps[key][0] == f"did you mean `{meant}`?", helps
+
+
+@pytest.mark.parametrize("name", ["done", "error"])
+def test_a_next_state_in_a_condition(tmp_path: Path, name: str) -> None:
+    text = SCENARIO_DESIGN.replace("E1: LOW.done | FILLING", f"E1: {name} | FILLING")
+    helps = _helps(tmp_path, text)
+    assert helps[("E0100", name)] == [f"test a subordinate's status with `SUB.{name}`"], helps

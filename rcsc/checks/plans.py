@@ -16,8 +16,7 @@ from __future__ import annotations
 
 from rcsc.semantics import graphs
 from rcsc.semantics import model as m
-from rcsc.diagnostics import Diagnostics
-from rcsc.checks.hints import closest
+from rcsc.diagnostics import Diagnostics, closest
 from rcsc.semantics.model import Design
 
 MAX_RULES = 10

@@ -28,7 +28,6 @@ from __future__ import annotations
 import dataclasses
 
 from rcsc.front import ast
-from rcsc.checks.hints import closest
 from rcsc.diagnostics import Diagnostics
 from rcsc.front.source import SourceFile, Span
 
@@ -96,14 +95,6 @@ class _Copier:
         return x
 
 
-def _guess(diag, name: str, declared) -> str | None:
-    """Add the "did you mean" of `name` among `declared` to `diag`; the guess, or None."""
-    best = closest(name, declared)
-    if best is not None:
-        diag.with_help(f"did you mean `{best}`?")
-    return best
-
-
 def _bind(params, args: list[ast.Arg], what: str, site: ast.Ident, diags: Diagnostics) -> dict[str, ast.Arg] | None:
     """Arguments matched to parameters by name (or position); None after a finding."""
     bound: dict[str, ast.Arg] = {}
@@ -126,7 +117,7 @@ def _bind(params, args: list[ast.Arg], what: str, site: ast.Ident, diags: Diagno
                 # A misspelt parameter that no other argument names stands
                 # for it (not also "needs `lo`", and the instance is made).
                 given = {b.name.name for b in args if b.name is not None} | set(bound)
-                meant = _guess(diag, key, [n for n in names if n not in given])
+                meant = diag.guess(key, [n for n in names if n not in given])
                 if meant is None:
                     ok = False
                     continue
@@ -338,7 +329,7 @@ def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerT
     if t is None:
         diag = diags.add("E0260", item.type_name.span, f"no controller type named `{item.type_name.name}`", "unknown controller type")
         diag.with_note("controller types: " + (", ".join(f"`{n}`" for n in sorted(ctypes)) or "none declared"))
-        meant = _guess(diag, item.type_name.name, ctypes)
+        meant = diag.guess(item.type_name.name, ctypes)
         if meant is not None:  # not also "never instantiated" (W0260)
             used.add(meant)
         return None
@@ -450,7 +441,7 @@ def _lower_blocks(ctrl: ast.Controller, btypes: dict[str, ast.BlockType], used: 
         if t is None:
             diag = diags.add("E0260", use.type_name.span, f"no block named `{use.type_name.name}`", "unknown block")
             diag.with_note("blocks: " + (", ".join(f"`{n}`" for n in sorted(btypes)) or "none declared") + " (`import std.blocks` for the standard ones)")
-            meant = _guess(diag, use.type_name.name, btypes)
+            meant = diag.guess(use.type_name.name, btypes)
             if meant is not None:  # not also "never instantiated" (W0260)
                 used.add(meant)
             ctrl.poisoned.append(use.name.name)
@@ -553,7 +544,7 @@ class _UseCopier(_Copier):
                     diag = self.d.add("E0262", a.name.span, f"block `{inst.t.name.name}` has no input `{a.name.name}`", "not an input")
                     diag.with_note("inputs: " + (", ".join(f"`{m.name.name}`" for m in inputs) or "none"))
                     given = {b.name.name for b in st.call.args if b.name is not None}
-                    _guess(diag, a.name.name, [m.name.name for m in inputs if m.name.name not in given])
+                    diag.guess(a.name.name, [m.name.name for m in inputs if m.name.name not in given])
                     continue
             if mb.name.name in seen:
                 self.d.add("E0262", a.span, f"input `{mb.name.name}` is given more than once", "repeated input")

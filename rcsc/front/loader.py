@@ -16,7 +16,6 @@ from importlib import resources
 from rcsc.outputs import safeio
 from rcsc.front import ast
 from rcsc.diagnostics import Diagnostics
-from rcsc.checks.hints import closest
 from rcsc.front.parse import text_to_ast
 from rcsc.front.source import SourceFile, Span, skip_trivia
 
@@ -146,9 +145,7 @@ def path_to_files(
             diag = diags.add("E0005", _target_span(item), f"no standard-library module `{item.target}`", "unknown module").with_note(
                 "the standard library has: " + ", ".join(stdlib_modules())
             )
-            best = closest(item.target, stdlib_modules())
-            if best is not None:
-                diag.with_help(f"did you mean `{best}`?")
+            diag.guess(item.target, stdlib_modules())
             if not item.target.startswith("std."):
                 # A bare name is read as a standard-library module; a file
                 # of the design is imported by its quoted path.

@@ -196,6 +196,14 @@ class _ObserverChecker(Checker):
             return m.Ref(node.span, self.design.gm[node.name].type, "gm", node.name)
         return super().e_Name(node, expected)
 
+    def _unknown_name(self, node: ast.Node, n: str) -> m.Expr:
+        before = len(self.d.items)
+        out = super()._unknown_name(node, n)
+        for d in self.d.items[before:]:
+            if d.code == "E0100" and not d.helps:
+                d.guess(n, [*self.design.gm, *self.g.consts, *self.g.functions, *self.design.controllers])
+        return out
+
     def e_Binary(self, node: ast.Binary, expected: Type | None) -> m.Expr:
         if node.op in ("==", "!="):
             for a, b in ((node.left, node.right), (node.right, node.left)):
@@ -209,6 +217,12 @@ class _ObserverChecker(Checker):
         if not (isinstance(a, ast.Attr) and isinstance(a.obj, ast.Name) and a.attr.name in _SYMBOL_ATTRS and isinstance(b, ast.Name)):
             return None
         ctrl = self.design.controllers.get(a.obj.name)
+        if ctrl is None and a.obj.name not in self.design.gm and a.obj.name not in self.g.consts:
+            # `TBB.state == SPOOLING`: the controller is unknown, so the
+            # state cannot be looked up; it is not also "not found".
+            self.d.add("E0100", a.obj.span, f"cannot find `{a.obj.name}` in this scope", "not found").guess(
+                a.obj.name, self.design.controllers)
+            return m.Const(node.span, ERROR, False)
         if ctrl is None or a.obj.name in self.design.gm:
             return None
         attr, sym = a.attr.name, b.name
@@ -225,7 +239,7 @@ class _ObserverChecker(Checker):
             what = {"state": "state", "status": "status value", "rule": "rule label", "verb": "verb"}[attr]
             self.d.add("E0703", b.span, f"`{ctrl.name}` has no {what} `{sym}`", f"unknown {what}").with_note(
                 f"{what}s of `{ctrl.name}`: " + (", ".join(known) if known else "none")
-            )
+            ).guess(sym, known)
             return m.Const(node.span, ERROR, False)
         return Observed(node.span, BOOL, ctrl.name, attr, sym)
 
@@ -259,6 +273,7 @@ class _ObserverChecker(Checker):
                 "available: status, state, rule, verb, done, error, executing, error_code, echo"
                 + "".join(", " + x for x in list(ctrl.statuses) + list(ctrl.status_fields))
             )
+            diag.guess(attr, [*fixed, *_SYMBOL_ATTRS, *ctrl.statuses, *ctrl.status_fields])
             return m.Const(node.span, ERROR, False)
         return super().e_Attr(node, expected)
 
@@ -359,7 +374,7 @@ def _fault(design: m.Design, diags: Diagnostics, span: Span, cycle: int, what: s
 def _command(design, checker, diags, span, cycle, cspan, ctrl: ast.Ident, verb: ast.Ident, args) -> Command | None:
     c = design.controllers.get(ctrl.name)
     if c is None:
-        diags.add("E0104", ctrl.span, f"no controller named `{ctrl.name}`", "unknown controller")
+        diags.add("E0104", ctrl.span, f"no controller named `{ctrl.name}`", "unknown controller").guess(ctrl.name, design.controllers)
         return None
     if c.supervisor is not None:
         diags.add("E0700", ctrl.span, f"`{c.name}` takes commands only from its supervisor `{c.supervisor}`", "not the top").with_note(
@@ -370,7 +385,7 @@ def _command(design, checker, diags, span, cycle, cspan, ctrl: ast.Ident, verb: 
     if v is None:
         diags.add("E0105", verb.span, f"`{c.name}` does not accept the verb `{verb.name}`", "unknown verb").with_note(
             f"`{c.name}` accepts: " + (", ".join(c.verbs) if c.verbs else "no verbs")
-        )
+        ).guess(verb.name, c.verbs)
         return None
     checker.s.const_only = True
     values = checker.match_args([(p.name, p.type) for p in v.params], args, ast.Node(span), f"`{c.name}.{v.name}`")
@@ -448,7 +463,8 @@ def _constant_value(checker: Checker, e: m.Expr) -> m.Const | None:
 def _input(design, checker, diags, span, cycle, cspan, var: ast.Ident, value: ast.Expr) -> Input | None:
     g = design.gm.get(var.name)
     if g is None:
-        diags.add("E0100", var.span, f"no Global Memory variable named `{var.name}`", "unknown variable")
+        diags.add("E0100", var.span, f"no Global Memory variable named `{var.name}`", "unknown variable").guess(
+            var.name, [n for n, v in design.gm.items() if v.from_env])
         return None
     if not g.from_env:
         diags.add("E0701", var.span, f"`{var.name}` is written by a controller, not by the environment", "not `from env`").with_help(

@@ -13,8 +13,7 @@ from __future__ import annotations
 
 from rcsc.front import ast
 from rcsc.semantics import model as m
-from rcsc.checks.hints import closest
-from rcsc.diagnostics import Diagnostics
+from rcsc.diagnostics import Diagnostics, closest
 from rcsc.front.instantiate import expand
 from rcsc.front.loader import LoadedFile
 from rcsc.front.source import Span
@@ -148,9 +147,7 @@ class _Sema:
             return self._record(n)
         diag = self.d.add("E0102", ref.name.span, f"unknown type `{n}`", "not a type")
         diag.with_note("types: bool, i32, i64, u32, f64, duration, and declared enums and records")
-        best = closest(n, [*self.g.types, *self.record_ast])
-        if best is not None:
-            diag.with_help(f"did you mean `{best}`?")
+        diag.guess(n, [*self.g.types, *self.record_ast])
         return ERROR
 
     def array_type(self, ref: ast.TypeRef) -> Type:
@@ -336,10 +333,9 @@ class _Sema:
             vs = self.verbsets.get(ref.name)
             if vs is None:
                 diag = self.d.add("E0106", ref.span, f"no verb set named `{ref.name}`", "unknown verb set")
-                best = closest(ref.name, self.verbsets)
+                best = diag.guess(ref.name, self.verbsets)
                 if best is None:
                     continue
-                diag.with_help(f"did you mean `{best}`?")
                 # The meant set stands in, so its verbs' plans are not each
                 # "for a verb the controller does not declare".
                 ref, vs = ast.Ident(ref.span, best), self.verbsets[best]

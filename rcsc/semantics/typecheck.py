@@ -14,7 +14,6 @@ from dataclasses import dataclass, field
 
 from rcsc.front import ast
 from rcsc.semantics import model as m
-from rcsc.checks.hints import closest
 from rcsc.diagnostics import Diagnostics
 from rcsc.semantics.evaluate import Env, NotConstant, eval_expr
 from rcsc.semantics.types import (
@@ -493,6 +492,10 @@ class Checker:
             diag.with_help(f"read a subordinate's status with `{n}.done`, `{n}.error`, ...")
         elif n == "cmd":
             diag.with_help("read a command parameter with `cmd.NAME`")
+        elif n in ("done", "error"):
+            # What a rule goes to, not something a condition can test.
+            diag.with_note(f"`{n}` is a next state, written after `->`" + (" as `error(CODE)`" if n == "error" else ""))
+            diag.with_help(f"test a subordinate's status with `SUB.{n}`")
         elif n == "in_state":
             diag.with_note("`in_state` is only available in the rules of a plan")
         elif n == "cycle":
@@ -827,9 +830,7 @@ class Checker:
                     noun = "field" if what.startswith("record") else "parameter"
                     diag = self.d.add("E0202", a.name.span, f"{what} has no {noun} `{a.name.name}`", f"unknown {noun}")
                     diag.with_note("parameters: " + ", ".join(names) if names else f"{what} takes no arguments")
-                    best = closest(a.name.name, names)
-                    if best is not None:
-                        diag.with_help(f"did you mean `{best}`?")
+                    diag.guess(a.name.name, names)
                     ok = False
                     continue
                 k = names.index(a.name.name)
@@ -884,9 +885,7 @@ class Checker:
             assert c is not None
             if node.status.name not in c.statuses:
                 diag = self.d.add("E0107", node.status.span, f"`{c.name}` declares no status value `{node.status.name}`", "undeclared status")
-                best = closest(node.status.name, c.statuses)
-                if best is not None:
-                    diag.with_help(f"did you mean `{best}`?")
+                diag.guess(node.status.name, c.statuses)
                 diag.with_help(f"declare it: `reports {node.status.name}`")
                 return None
             return m.Report(node.span, node.status.name)
