@@ -114,6 +114,10 @@ A GM variable that exists but is not listed in `reads` is reported with a help.
 Two declarations in the same scope have the same name. Every type, constant,
 Global Memory variable, function, controller, CPU, verb, local, status field
 and rule label must be unique in its scope.
+
+A local or a status field may not take the name of a Global Memory variable
+its controller reads or writes: inside the controller the bare name would be
+the local, and the variable would silently never be read or written.
 """),
     ("W0101", _W, "a status field or value named like a built-in status", """
 A status field, and an extra status value of `reports`, are there to be read:

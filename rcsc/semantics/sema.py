@@ -377,6 +377,17 @@ class _Sema:
             if n in c.status_fields or n in c.locals:
                 self.d.add("E0101", decl.name.span, f"`{n}` is defined more than once in `{name}`", f"repeated {what}")
                 continue
+            gm_use = next((u for u in c.reads + c.writes if u.name == n), None)
+            if gm_use is not None:
+                # Inside the controller the bare name would be the field or
+                # the local: the Global Memory variable would silently never
+                # be read or written.
+                access = "writes" if any(u is gm_use for u in c.writes) else "reads"
+                self.d.add("E0101", decl.name.span, f"`{n}` is both a {what} of `{name}` and a Global Memory variable it {access}",
+                           f"{what} named like a Global Memory variable").with_label(gm_use.span, f"`{access}` names it here").with_note(
+                    f"inside `{name}`, `{n}` would name the {what}, never the Global Memory variable").with_help(
+                    f"rename the {what}")
+                continue
             if table is c.status_fields and n in c.statuses:
                 # `C.homed` would name both; readers take the status value.
                 self.d.add("E0101", decl.name.span, f"`{n}` is both a status value (`reports {n}`) and a status field of `{name}`",
