@@ -246,6 +246,22 @@ The name called is not a function, extern, record type or conversion, or an
 `extern` function is called inside a pure `fn` (pure functions must be the same
 on every target and cannot call hand-written code).
 """),
+    ("W0213", _W, "the value of a call is not used", """
+A function call written as a statement, in `pre`, `post`, an `if` or a rule's
+job list, whose value nothing takes. A `fn`, a built-in function and a
+conversion do nothing but compute their value, so the call has no effect:
+most often an assignment was meant. (A block instance is called as a
+statement on purpose, and so may an `extern` function, for what its
+hand-written code does.)
+
+Wrong:
+
+    post { abs(speed); }
+
+Right:
+
+    post { speed = abs(speed); }
+"""),
     # ---- controller types and function blocks -------------------------------
     ("E0260", _E, "unknown controller type or block", """
 `controller NAME: TYPE(...)` names a controller type that is not declared, or

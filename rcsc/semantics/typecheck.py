@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from rcsc.front import ast
+from rcsc.front.source import Span
 from rcsc.semantics import model as m
 from rcsc.diagnostics import Diagnostics
 from rcsc.semantics.evaluate import Env, NotConstant, eval_expr
@@ -876,6 +877,18 @@ class Checker:
         if isinstance(node, ast.CallStmt):
             e = self.expr(node.call)
             if isinstance(e, m.Call):
+                if e.kind != "extern":
+                    # Only hand-written code can do something besides its value.
+                    # The statement's span, which the parsers give the call too, ends with its `;`.
+                    whole = node.call.span
+                    call = Span(whole.file, whole.start, whole.start + len(whole.text.rstrip().removesuffix(";").rstrip()))
+                    diag = self.d.add("W0213", call, f"the value of `{e.func}(...)` is not used", "value dropped").with_note(
+                        "a function does nothing but compute its value")
+                    first = node.call.args[0].value if node.call.args else None
+                    if isinstance(first, ast.Name):
+                        diag.with_help(f"to change `{first.name}`, assign the value: `{first.name} = {call.text}`")
+                    else:
+                        diag.with_help("assign the value to a variable, or remove the call")
                 return m.CallStmt(node.span, e)
             return None
         if isinstance(node, ast.Command):
