@@ -206,3 +206,14 @@ def test_a_next_state_in_a_condition(tmp_path: Path, name: str) -> None:
     text = SCENARIO_DESIGN.replace("E1: LOW.done | FILLING", f"E1: {name} | FILLING")
     helps = _helps(tmp_path, text)
     assert helps[("E0100", name)] == [f"test a subordinate's status with `SUB.{name}`"], helps
+
+
+def test_not_a_subordinate_says_where_it_stands(tmp_path: Path) -> None:
+    path = Path(__file__).parent / "cases" / "E0507_up_and_across_the_hierarchy.rcs"
+    found = {(d.span.line, d.message): d.helps for d in check_path(str(path)).diags}
+    # Adding `subordinates` is no fix for any of these: it would give LOW a
+    # second supervisor, MID itself, TOP a cycle.
+    assert found[(15, "`LOW` is not a subordinate of `TOP`")] == ["command `MID`, which commands `LOW`"]
+    assert found[(17, "`LOW` is not a subordinate of `TOP`")] == ["read `MID`'s status, or share the data through Global Memory"]
+    assert found[(26, "`MID` cannot command itself")] == ["to go on with other work, move to another state of the plan"]
+    assert found[(27, "`TOP` is not a subordinate of `MID`")] == ["`TOP` reads `MID`'s status; share other data through Global Memory"]

@@ -588,6 +588,32 @@ class Checker:
         self.d.add("E0100", arg.span, f"`age` needs a Global Memory variable or a subordinate; `{n}` is neither", "not a buffer")
         return m.Const(node.span, ERROR, 0)
 
+    def _not_a_subordinate(self, span, sub: str, commanding: bool) -> None:
+        """E0507 for a command to, or a status read of, a controller that the
+        current one does not list in `subordinates`, with the fix that fits
+        where `sub` stands in the hierarchy."""
+        c = self.s.controller
+        assert c is not None
+        if sub == c.name:
+            self.d.add("E0507", span, f"`{sub}` cannot command itself", "itself").with_note(
+                "commands go down the hierarchy, to the controllers in `subordinates`").with_help(
+                "to go on with other work, move to another state of the plan")
+            return
+        diag = self.d.add("E0507", span, f"`{sub}` is not a subordinate of `{c.name}`", "not a subordinate")
+        supervisor = next((o.name for o in self.g.controllers.values() if any(u.name == sub for u in o.subordinates)), None)
+        if any(u.name == c.name for u in self.g.controllers[sub].subordinates):
+            diag.with_note(f"`{sub}` is the supervisor of `{c.name}`: commands go down the hierarchy, status comes up")
+            diag.with_help(f"`{sub}` reads `{c.name}`'s status; share other data through Global Memory")
+        elif supervisor is not None:
+            # Adding it would give it a second supervisor (E0300).
+            diag.with_note(f"`{sub}` is a subordinate of `{supervisor}`; a controller has one supervisor")
+            diag.with_help(f"command `{supervisor}`, which commands `{sub}`" if commanding
+                           else f"read `{supervisor}`'s status, or share the data through Global Memory")
+        elif commanding:
+            diag.with_help(f"add `subordinates {sub}` to `{c.name}`")
+        else:
+            diag.with_help(f"add `subordinates {sub}` to `{c.name}`, or read shared data through Global Memory")
+
     def _sub_view(self, node: ast.Attr, sub: str, attr: str) -> m.Expr:
         c = self.s.controller
         assert c is not None
@@ -599,9 +625,7 @@ class Checker:
             )
             return m.Const(node.span, ERROR, 0)
         if not any(u.name == sub for u in c.subordinates):
-            self.d.add("E0507", node.obj.span, f"`{sub}` is not a subordinate of `{c.name}`", "not a subordinate").with_help(
-                f"add `subordinates {sub}` to `{c.name}`, or read shared data through Global Memory"
-            )
+            self._not_a_subordinate(node.obj.span, sub, commanding=False)
             return m.Const(node.span, ERROR, 0)
         target = self.g.controllers[sub]
         fixed = {"done": BOOL, "error": BOOL, "executing": BOOL, "error_code": I32, "age": DURATION}
@@ -988,9 +1012,7 @@ class Checker:
             self.d.add("E0104", node.sub.span, f"no controller named `{sub}`", "unknown controller")
             return None
         if not any(u.name == sub for u in c.subordinates):
-            self.d.add("E0507", node.sub.span, f"`{sub}` is not a subordinate of `{c.name}`", "not a subordinate").with_help(
-                f"add `subordinates {sub}` to `{c.name}`"
-            )
+            self._not_a_subordinate(node.sub.span, sub, commanding=True)
             return None
         target = self.g.controllers[sub]
         verb = target.verbs.get(node.verb.name)
