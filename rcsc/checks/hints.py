@@ -1,12 +1,14 @@
 """"Did you mean" helps for typos, added after every stage has run.
 
 A misspelt name is the most common mistake and the most confusing one to
-read about: `levl_m` is "not found", a plan `FILL_T0` is "for a verb the
-controller does not declare".  This pass looks at the findings about unknown
-names (E0100, E0103, E0104, E0105, E0501) and at syntax errors where an
+read about: `levl_m` is "not found", a verb `GOO` is "not accepted".  This
+pass looks at the findings about unknown names (E0100, E0103, E0104, E0105)
+whose candidates the model knows and at syntax errors where an
 operator of another language was written (`&&`, `||`, `!`, `else if`), and
 adds a help naming the closest declared name or the rcs spelling.  It only
-adds helps; it never changes a finding's code, span or message.
+adds helps; it never changes a finding's code, span or message.  (The
+findings whose guess also stands in for the name, so that no follow-on
+findings are reported, guess where they are made: `Diagnostic.guess`.)
 """
 
 from __future__ import annotations
@@ -62,9 +64,6 @@ def _candidates(design: Design, d: Diagnostic) -> list[str]:
     if d.code == "E0105" and quoted:
         sub = design.controllers.get(quoted[0])
         return list(sub.verbs) if sub else []
-    if d.code == "E0501":
-        c = _controller_at(design, d)
-        return list(c.verbs) if c else []
     if d.code == "E0103" and len(quoted) >= 2:
         owner = quoted[0]
         if d.message.startswith("enum") and owner in design.enums:
@@ -113,7 +112,7 @@ def add_hints(diags: Diagnostics, design: Design | None) -> None:
             if hint is not None:
                 d.helps.insert(0, hint)
             continue
-        if design is None or d.code not in ("E0100", "E0103", "E0104", "E0105", "E0501") or d.span is None:
+        if design is None or d.code not in ("E0100", "E0103", "E0104", "E0105") or d.span is None:
             continue
         name = d.span.text
         if not name.isidentifier():

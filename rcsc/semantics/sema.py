@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from rcsc.front import ast
 from rcsc.semantics import model as m
-from rcsc.diagnostics import Diagnostics, closest
+from rcsc.diagnostics import Diagnostic, Diagnostics, closest
 from rcsc.front.instantiate import expand
 from rcsc.front.loader import LoadedFile
 from rcsc.front.source import Span
@@ -505,6 +505,7 @@ class _Sema:
             # other controllers' checks need of them is the summary.
             c.plans = m.ElidedPlans(summary)
             return
+        orphans: list[tuple[str, Diagnostic]] = []  # plans for undeclared verbs
         for plan in item.plans:
             verb_name = plan.name.name
             if verb_name in c.plans:
@@ -514,7 +515,7 @@ class _Sema:
             verb = c.verbs.get(verb_name)
             if verb is None:
                 diag = self.d.add("E0501", plan.name.span, f"plan `{verb_name}` is for a verb `{c.name}` does not declare", "no such verb")
-                diag.with_help(f"declare it: `verb {verb_name}`")
+                orphans.append((verb_name, diag))
                 verb = m.Verb(verb_name, [], plan.name.span)
             c.plans[verb_name] = self.plan(c, verb, plan)
         if self.release_plans:
@@ -522,8 +523,17 @@ class _Sema:
             # go as soon as they are converted keeps the tree and the model
             # from being in memory whole at the same time.
             item.plans = []
+        # A misspelt plan name (`plan ALL_STPO`) is one finding: the verb it
+        # most likely means, among those without a plan, is not also "without
+        # a plan" (E0500).
+        meant: set[str] = set()
+        for verb_name, diag in orphans:
+            best = diag.guess(verb_name, [v for v in c.verbs if v not in c.plans and v not in meant])
+            if best is not None:
+                meant.add(best)
+            diag.with_help(f"declare it: `verb {verb_name}`")
         for v in c.verbs.values():
-            if v.name not in c.plans:
+            if v.name not in c.plans and v.name not in meant:
                 diag = self.d.add("E0500", v.use_span, f"verb `{v.name}` of `{c.name}` has no plan", "no plan for this verb")
                 diag.with_help(f"add `plan {v.name} {{ ... }}` to `{c.name}`")
 
