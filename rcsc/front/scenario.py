@@ -294,6 +294,7 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
     cycles_span: Span | None = None
     named: Span | None = None
     sc = Scenario(name, source.path, 0)
+    windows: list[tuple[int, int, Span]] = []  # the cycles `at N` / `within A..B` of the expectations
     for item in items:
         kind = item[0]
         if kind == "name":
@@ -328,6 +329,8 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
             e = observer.condition(cond)
             if when == "within" and lo > hi:
                 diags.add("E0702", wspan, f"empty window: {lo} is after {hi}", "empty window")
+            if when in ("at", "within"):
+                windows.append((lo, hi, wspan))
             sc.expects.append(Expectation(when, lo, hi, e, span, cond.span.text))
     if cycles is None:
         diags.add("E0704", Span(source, 0, 0), "the scenario does not say how many cycles to run", "no `cycles`").with_help(
@@ -345,9 +348,7 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
     sc.cycles = cycles
     for when_cycle, span in [(c.cycle, c.cycle_span or c.span) for c in sc.commands] + [(i.cycle, i.cycle_span or i.span) for i in sc.inputs] + [
         (f.cycle, f.cycle_span or f.span) for f in sc.faults
-    ] + [
-        (e.hi, e.span) for e in sc.expects if e.kind in ("at", "within")
-    ] + [(e.lo, e.span) for e in sc.expects if e.kind in ("at", "within")]:
+    ] + [(hi, wspan) for _, hi, wspan in windows] + [(lo, wspan) for lo, _, wspan in windows]:
         if not 1 <= when_cycle <= cycles:
             diags.add("E0702", span, f"cycle {when_cycle} is outside the scenario's cycles 1..{cycles}", "outside the run")
     if len(diags.errors) > start:
@@ -388,7 +389,9 @@ def _command(design, checker, diags, span, cycle, cspan, ctrl: ast.Ident, verb: 
         ).guess(verb.name, c.verbs)
         return None
     checker.s.const_only = True
-    values = checker.match_args([(p.name, p.type) for p in v.params], args, ast.Node(span), f"`{c.name}.{v.name}`")
+    # A wrong number of arguments is shown on the command, not the whole line.
+    call = Span(ctrl.span.file, ctrl.span.start, span.end)
+    values = checker.match_args([(p.name, p.type) for p in v.params], args, ast.Node(call), f"`{c.name}.{v.name}`")
     if values is None:
         return None
     out = {}
