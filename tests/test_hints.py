@@ -217,3 +217,27 @@ def test_not_a_subordinate_says_where_it_stands(tmp_path: Path) -> None:
     assert found[(17, "`LOW` is not a subordinate of `TOP`")] == ["read `MID`'s status, or share the data through Global Memory"]
     assert found[(26, "`MID` cannot command itself")] == ["to go on with other work, move to another state of the plan"]
     assert found[(27, "`TOP` is not a subordinate of `MID`")] == ["`TOP` reads `MID`'s status; share other data through Global Memory"]
+
+
+@pytest.mark.parametrize(
+    "old,new,meant",
+    [
+        ("    subordinates LOW\n", "    subordinate LOW\n", "subordinates"),
+        ("    overhead", "    overheed", "overhead"),
+        ("    plan RUN {", "    plna RUN {", "plan"),
+        ("    plan RUN {", "    plan RUN orderd {", "ordered"),
+        ("and count < LIMT", "adn count < LIMT", "and"),
+    ],
+)
+def test_a_misspelt_keyword(tmp_path: Path, old: str, new: str, meant: str) -> None:
+    text = TYPOS.replace("    heartbeat 10 ms\n", "    heartbeat 10 ms\n    overhead 1 ms\n")
+    helps = _helps(tmp_path, text.replace(old, new, 1))
+    assert [h[0] for h in helps.values()] == [f"did you mean `{meant}`?"], helps
+
+
+def test_the_rule_help_only_in_a_plan(tmp_path: Path) -> None:
+    # After `heartbeat 10 ms` a `;` may follow, but this is no rule.
+    helps = _helps(tmp_path, TYPOS.replace("    heartbeat 10 ms\n", "    heartbeat 10 ms\n    xyzzy 3\n"))
+    assert list(helps.values()) == [[]], helps
+    helps = _helps(tmp_path, TYPOS.replace("E9: LOW.error | * -> error(1);", "E9: LOW.error | * -> error(1)"))
+    assert list(helps.values()) == [["a rule ends with `;`: `LABEL: condition | state -> next | jobs;`"]], helps

@@ -854,13 +854,14 @@ class Checker:
                 if a.name.name not in names:
                     noun = "field" if what.startswith("record") else "parameter"
                     diag = self.d.add("E0202", a.name.span, f"{what} has no {noun} `{a.name.name}`", f"unknown {noun}")
-                    diag.with_note("parameters: " + ", ".join(names) if names else f"{what} takes no arguments")
+                    diag.with_note(f"{noun}s: " + ", ".join(names) if names else f"{what} takes no arguments")
                     diag.guess(a.name.name, names)
                     ok = False
                     continue
                 k = names.index(a.name.name)
                 if slots[k] is not None:
-                    self.d.add("E0202", a.name.span, f"parameter `{a.name.name}` given twice", "given again")
+                    noun = "field" if what.startswith("record") else "parameter"
+                    self.d.add("E0202", a.name.span, f"{noun} `{a.name.name}` given twice", "given again")
                     ok = False
                     continue
                 slots[k] = a
