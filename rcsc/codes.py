@@ -1140,6 +1140,24 @@ reports and JUnit files.
 freezes one controller (it is not stepped any more). The name after `stop` must
 be one of the design's CPUs and the name after `freeze` one of its controllers.
 """),
+    ("W0706", _W, "two commands to one controller, or two values for one input, in one cycle", """
+A controller's command buffer holds one command, and a Global Memory variable
+one value: of two commands to the same controller at the same cycle, or two
+values for the same input, the controller sees only the last (the second
+command supersedes the first, whose serial number is skipped), and the first
+has no effect. That is most often a line copied without changing its cycle:
+give each its own cycle, or remove the one not meant.
+
+Wrong:
+
+    at 10: SM.TRANSIT(speed = 12.0, leg_time = 600 s)
+    at 10: SM.ALL_STOP()
+
+Right:
+
+    at 10: SM.TRANSIT(speed = 12.0, leg_time = 600 s)
+    at 200: SM.ALL_STOP()
+"""),
     ("E0830", _E, "the simulator's externs file does not load", """
 `rcsc sim --externs FILE.py` (and `rcsc test --externs`) runs the design
 with Python functions standing in for its extern functions. The file could

@@ -351,12 +351,28 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
     ] + [(hi, wspan) for _, hi, wspan in windows] + [(lo, wspan) for lo, _, wspan in windows]:
         if not 1 <= when_cycle <= cycles:
             diags.add("E0702", span, f"cycle {when_cycle} is outside the scenario's cycles 1..{cycles}", "outside the run")
+    _one_per_cycle(sc, diags)
     if len(diags.errors) > start:
         return None
     sc.commands.sort(key=lambda c: c.cycle)
     sc.inputs.sort(key=lambda i: i.cycle)
     sc.faults.sort(key=lambda f: f.cycle)
     return sc
+
+
+def _one_per_cycle(sc: Scenario, diags: Diagnostics) -> None:
+    """W0706: a second command to one controller, or a second value for one
+    input, at the same cycle (the first would be overwritten unseen)."""
+    first: dict[tuple, Span] = {}
+    for key, span, what in [((c.cycle, "cmd", c.ctrl), c.span, f"`{c.ctrl}` gets a second command") for c in sc.commands] + [
+        ((i.cycle, "in", i.var), i.span, f"`{i.var}` gets a second value") for i in sc.inputs
+    ]:
+        if key in first:
+            diag = diags.add("W0706", span, f"{what} at cycle {key[0]}", "overwrites the first")
+            diag.with_label(first[key], "the first, without effect")
+            diag.with_help("give each its own cycle, or remove the one not meant")
+            continue
+        first[key] = span
 
 
 def _fault(design: m.Design, diags: Diagnostics, span: Span, cycle: int, what: str, target: ast.Ident) -> Fault | None:
