@@ -169,10 +169,13 @@ does not declare.
 A job list issues `SUB.VERB(...)` but SUB declares no such verb. A command may
 only use a verb that the subordinate accepts (paper section 5.3.2).
 """),
-    ("E0106", _E, "unknown verb set", """
+    ("E0106", _E, "unknown verb set, or a verb set declared as a verb", """
 `verbs NAME` in a controller names no `verbset` of the design or its imports.
 Declare the verb set, import the module that has it (`import std.lifecycle`
 for `Lifecycle`), or list the verbs one by one with `verb`.
+
+`verb NAME` (one verb, without parameters or a plan of that name) where NAME
+is a verb set was meant as `verbs NAME`: write `verbs` to take the set's verbs.
 """),
     ("E0107", _E, "unknown status value", """
 `report NAME` names a status value the controller did not declare with

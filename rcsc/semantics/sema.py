@@ -327,9 +327,19 @@ class _Sema:
                 if value is not None:
                     self.check_in_range(value.value, self.range_of(param.type, pt, checker), arg.span, pt)
         verbs = list(item.verbs)
+        set_refs = list(item.verb_sets)
+        for v in item.verbs:
+            n = v.name.name
+            if not v.params and n in self.verbsets and not any(p.name.name == n for p in item.plans):
+                # `verb Lifecycle` for `verbs Lifecycle`: one finding, and the
+                # set's verbs stand in (their plans are not each E0501).
+                self.d.add("E0106", v.name.span, f"`{n}` is a verb set, not a verb", "a verb set").with_help(
+                    f"take its verbs with `verbs {n}`")
+                verbs.remove(v)
+                set_refs.append(v.name)
         uses: list[Span | None] = [None] * len(verbs)
         used_sets: set[str] = set()
-        for ref in item.verb_sets:
+        for ref in set_refs:
             vs = self.verbsets.get(ref.name)
             if vs is None:
                 diag = self.d.add("E0106", ref.span, f"no verb set named `{ref.name}`", "unknown verb set")
