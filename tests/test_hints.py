@@ -241,3 +241,8 @@ def test_the_rule_help_only_in_a_plan(tmp_path: Path) -> None:
     assert list(helps.values()) == [[]], helps
     helps = _helps(tmp_path, TYPOS.replace("E9: LOW.error | * -> error(1);", "E9: LOW.error | * -> error(1)"))
     assert list(helps.values()) == [["a rule ends with `;`: `LABEL: condition | state -> next | jobs;`"]], helps
+
+
+def test_a_bare_enum_member(tmp_path: Path) -> None:
+    helps = _helps(tmp_path, TYPOS.replace("Mode.AUT == Mode.AUTO", "Mode.AUTO == MANUAL"))
+    assert helps[("E0100", "MANUAL")] == ["write `Mode.MANUAL`: a member is named with its enum"], helps

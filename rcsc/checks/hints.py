@@ -117,6 +117,8 @@ def add_hints(diags: Diagnostics, design: Design | None) -> None:
         name = d.span.text
         if not name.isidentifier():
             continue
+        if d.code == "E0100" and d.message.startswith("cannot find") and d.helps:
+            continue  # the finding already says what the name is (an enum member, a next state, ...)
         best = closest(name, _candidates(design, d))
         if best is not None:
             d.helps.insert(0, f"did you mean `{best}`?")

@@ -28,7 +28,7 @@ from __future__ import annotations
 import dataclasses
 
 from rcsc.front import ast
-from rcsc.diagnostics import Diagnostics
+from rcsc.diagnostics import Diagnostics, closest
 from rcsc.front.source import SourceFile, Span
 
 SEP = "__"  # between a block instance's name and its member's
@@ -347,6 +347,15 @@ def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerT
             path = _gm_path(arg.value)
             if path is None:
                 diags.add("E0263", arg.value.span, f"`{p.name.name}` is a `gm` parameter: bind it to a Global Memory variable or field",
+                          "not a Global Memory name").with_label(p.span, "declared `gm` here")
+                ok = False
+                continue
+            root = path[0].name
+            if root not in gm and closest(root, gm) is None:
+                # A constant or another name that is no Global Memory (a
+                # misspelt variable is reported, with its guess, where the
+                # instance `reads` or `writes` it).
+                diags.add("E0263", path[0].span, f"`{p.name.name}` is a `gm` parameter: `{root}` is not a Global Memory variable",
                           "not a Global Memory name").with_label(p.span, "declared `gm` here")
                 ok = False
                 continue

@@ -493,6 +493,9 @@ class Checker:
             diag.with_help(f"read a subordinate's status with `{n}.done`, `{n}.error`, ...")
         elif n == "cmd":
             diag.with_help("read a command parameter with `cmd.NAME`")
+        elif owners := [t for t in self.g.types.values() if isinstance(t, EnumType) and n in t.members]:
+            # An enum member is named with its enum (one rule for every enum).
+            diag.with_help("write " + " or ".join(f"`{t.name}.{n}`" for t in owners) + ": a member is named with its enum")
         elif n in ("done", "error"):
             # What a rule goes to, not something a condition can test.
             diag.with_note(f"`{n}` is a next state, written after `->`" + (" as `error(CODE)`" if n == "error" else ""))
