@@ -246,3 +246,14 @@ def test_the_rule_help_only_in_a_plan(tmp_path: Path) -> None:
 def test_a_bare_enum_member(tmp_path: Path) -> None:
     helps = _helps(tmp_path, TYPOS.replace("Mode.AUT == Mode.AUTO", "Mode.AUTO == MANUAL"))
     assert helps[("E0100", "MANUAL")] == ["write `Mode.MANUAL`: a member is named with its enum"], helps
+
+
+def test_a_command_outside_a_rule(tmp_path: Path) -> None:
+    helps = _helps(tmp_path, TYPOS.replace("    verb RUN\n", "    post { LOW.GO(); }\n    verb RUN\n"))
+    assert list(helps.values()) == [["a command is a job of a plan's rule (`E1: condition | S1 -> S2 | SUB.VERB();`), not a statement"]]
+
+
+def test_no_rule_help_inside_a_condition(tmp_path: Path) -> None:
+    # `(` inside a condition is no missing `;` at the end of a rule.
+    helps = _helps(tmp_path, TYPOS.replace("E9: LOW.error |", "E9: LOW.error() |"))
+    assert list(helps.values()) == [[]], helps

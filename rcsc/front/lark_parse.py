@@ -631,11 +631,17 @@ def _syntax_error(parser: Lark, source: SourceFile, exc: UnexpectedInput, diags:
         words = re.findall(r"`([A-Za-z_]\w*)`", " ".join(expected))
         if diag.guess(str(tok), words) is not None:
             return
-    if "`;`" in expected and tok.type != "$END" and _in_plan(text, start):
+    if str(tok) == "(" and _COMMAND_BEFORE.search(text, 0, start) and not _in_plan(text, start):
+        # `SUB.VERB()` in `pre`, `post` or a block's step: only a rule sends commands.
+        diag.with_help("a command is a job of a plan's rule (`E1: condition | S1 -> S2 | SUB.VERB();`), not a statement")
+        return
+    # A rule whose `;` is missing: the next line's start is unexpected.
+    if "`;`" in expected and tok.type != "$END" and "\n" in text[:start][len(text[:start].rstrip()):] and _in_plan(text, start):
         diag.with_help("a rule ends with `;`: `LABEL: condition | state -> next | jobs;`")
 
 
 _PLAN_HEADER = re.compile(r"\s*plan\b")
+_COMMAND_BEFORE = re.compile(r"\b[A-Za-z_]\w*\s*\.\s*[A-Za-z_]\w*\s*\Z")
 
 
 def _in_plan(text: str, pos: int) -> bool:
