@@ -122,6 +122,10 @@ A GM variable that exists but is not listed in `reads` is reported with a help.
 Two declarations in the same scope have the same name. Every type, constant,
 Global Memory variable, function, controller, CPU, verb, local, status field
 and rule label must be unique in its scope.
+
+A local or a status field may not take the name of a Global Memory variable
+its controller reads or writes: inside the controller the bare name would be
+the local, and the variable would silently never be read or written.
 """),
     ("W0101", _W, "a status field or value named like a built-in status", """
 A status field, and an extra status value of `reports`, are there to be read:
@@ -173,10 +177,13 @@ does not declare.
 A job list issues `SUB.VERB(...)` but SUB declares no such verb. A command may
 only use a verb that the subordinate accepts (paper section 5.3.2).
 """),
-    ("E0106", _E, "unknown verb set", """
+    ("E0106", _E, "unknown verb set, or a verb set declared as a verb", """
 `verbs NAME` in a controller names no `verbset` of the design or its imports.
 Declare the verb set, import the module that has it (`import std.lifecycle`
 for `Lifecycle`), or list the verbs one by one with `verb`.
+
+`verb NAME` (one verb, without parameters or a plan of that name) where NAME
+is a verb set was meant as `verbs NAME`: write `verbs` to take the set's verbs.
 """),
     ("E0107", _E, "unknown status value", """
 `report NAME` names a status value the controller did not declare with
@@ -249,6 +256,22 @@ largest value you mean, or compute infinity explicitly (e.g. `1.0 / 0.0`).
 The name called is not a function, extern, record type or conversion, or an
 `extern` function is called inside a pure `fn` (pure functions must be the same
 on every target and cannot call hand-written code).
+"""),
+    ("W0213", _W, "the value of a call is not used", """
+A function call written as a statement, in `pre`, `post`, an `if` or a rule's
+job list, whose value nothing takes. A `fn`, a built-in function and a
+conversion do nothing but compute their value, so the call has no effect:
+most often an assignment was meant. (A block instance is called as a
+statement on purpose, and so may an `extern` function, for what its
+hand-written code does.)
+
+Wrong:
+
+    post { abs(speed); }
+
+Right:
+
+    post { speed = abs(speed); }
 """),
     # ---- controller types and function blocks -------------------------------
     ("E0260", _E, "unknown controller type or block", """
@@ -1127,6 +1150,24 @@ reports and JUnit files.
 `at N: stop CPU` stops a CPU (it runs no more cycles) and `at N: freeze CTRL`
 freezes one controller (it is not stepped any more). The name after `stop` must
 be one of the design's CPUs and the name after `freeze` one of its controllers.
+"""),
+    ("W0706", _W, "two commands to one controller, or two values for one input, in one cycle", """
+A controller's command buffer holds one command, and a Global Memory variable
+one value: of two commands to the same controller at the same cycle, or two
+values for the same input, the controller sees only the last (the second
+command supersedes the first, whose serial number is skipped), and the first
+has no effect. That is most often a line copied without changing its cycle:
+give each its own cycle, or remove the one not meant.
+
+Wrong:
+
+    at 10: SM.TRANSIT(speed = 12.0, leg_time = 600 s)
+    at 10: SM.ALL_STOP()
+
+Right:
+
+    at 10: SM.TRANSIT(speed = 12.0, leg_time = 600 s)
+    at 200: SM.ALL_STOP()
 """),
     ("E0830", _E, "the simulator's externs file does not load", """
 `rcsc sim --externs FILE.py` (and `rcsc test --externs`) runs the design

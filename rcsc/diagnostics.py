@@ -9,6 +9,7 @@ a `Diagnostics` bag; the command line renders the bag at the end (see
 
 from __future__ import annotations
 
+import difflib
 import enum
 from dataclasses import dataclass, field
 
@@ -56,10 +57,48 @@ class Diagnostic:
         self.helps.append(help_)
         return self
 
+    def guess(self, name: str, declared) -> str | None:
+        """Add "did you mean" the name among `declared` closest to the unknown
+        `name` (`closest`), if one is close enough; that name, or None."""
+        best = closest(name, declared)
+        if best is not None:
+            self.helps.append(f"did you mean `{best}`?")
+        return best
+
     def with_label(self, span: Span | None, message: str) -> "Diagnostic":
         if span is not None:
             self.labels.append(Label(plain_span(span)[0], message))
         return self
+
+
+def closest(name: str, candidates) -> str | None:
+    """The declared name closest to `name` (case ignored), if one is close enough."""
+    cands = sorted({c for c in candidates if c and c != name})
+    if not cands:
+        return None
+    lower = {c.lower(): c for c in cands}
+    if name.lower() in lower:
+        return lower[name.lower()]
+    hit = difflib.get_close_matches(name.lower(), list(lower), n=1, cutoff=0.75)
+    if hit:
+        return lower[hit[0]]
+    # A short name has too few letters for the similarity ratio: `PX` for
+    # `PR`, `LWO` for `LOW`, `xo` for `x0` score 0.5 to 0.67.  One typo (a
+    # letter replaced, added, dropped, or two swapped) is still a guess when
+    # only one declared name is that close.
+    near = [c for low, c in lower.items() if _one_typo(name.lower(), low)]
+    return near[0] if len(near) == 1 else None
+
+
+def _one_typo(a: str, b: str) -> bool:
+    """Whether `a` and `b` differ by one letter replaced, added or dropped, or two neighbours swapped."""
+    if a == b or abs(len(a) - len(b)) > 1:
+        return False
+    if len(a) == len(b):
+        diff = [i for i in range(len(a)) if a[i] != b[i]]
+        return len(diff) == 1 or (len(diff) == 2 and diff[1] == diff[0] + 1 and a[diff[0]] == b[diff[1]] and a[diff[1]] == b[diff[0]])
+    short, long_ = (a, b) if len(a) < len(b) else (b, a)
+    return any(long_[:i] + long_[i + 1:] == short for i in range(len(long_)))
 
 
 def plain_span(span: Span) -> tuple[Span, list[Label], str]:

@@ -135,6 +135,11 @@ def collect_if_grown(factor: float | None = None) -> bool:
     return True
 
 
+# The findings of an import that failed (the file cannot be read, lies
+# outside the design folder, or is no standard-library module).
+_IMPORT_CODES = frozenset({"E0003", "E0004", "E0005"})
+
+
 def _check_path(path: str, as_module: bool, overlay: dict[str, str] | None, cache_dir: str | None, keep_plans: bool = True,
                 guard_store=None, value_store=None) -> CheckResult:
     diags = Diagnostics()
@@ -142,6 +147,12 @@ def _check_path(path: str, as_module: bool, overlay: dict[str, str] | None, cach
     if any(f.tree is None for f in files):
         # A file that does not parse leaves holes that would only produce
         # follow-on findings; report the syntax errors alone.
+        add_hints(diags, None)
+        return CheckResult(diags, None, files)
+    if any(d.code in _IMPORT_CODES for d in diags.items):
+        # So does an import that failed: every name the missing module
+        # declares (a verb set, a function, a type) would be reported as
+        # unknown wherever it is used, burying the one finding that matters.
         add_hints(diags, None)
         return CheckResult(diags, None, files)
     design = ast_to_model(files, diags, release_plans=not keep_plans)

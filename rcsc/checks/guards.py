@@ -249,9 +249,11 @@ def _may_be_nan(e: m.Expr, params_nan: bool) -> bool:
 
 
 def front_end_errors(diags: Diagnostics) -> bool:
-    """Whether names or types failed (E00xx-E02xx): the model then holds placeholders
-    (error types, values replaced by 0) that would only give follow-on findings."""
-    return any(d.severity is Severity.ERROR and d.code[1:3] in ("00", "01", "02") for d in diags)
+    """Whether names or types failed (E00xx-E02xx, or E0507: a command to or a
+    status read of a controller that is not a subordinate): the model then
+    holds placeholders (error types, values replaced by 0, commands left out)
+    that would only give follow-on findings."""
+    return any(d.severity is Severity.ERROR and (d.code[1:3] in ("00", "01", "02") or d.code == "E0507") for d in diags)
 
 
 # ---- one plan: shared, stored or analysed ---------------------------------------------------

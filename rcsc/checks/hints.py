@@ -1,35 +1,24 @@
 """"Did you mean" helps for typos, added after every stage has run.
 
 A misspelt name is the most common mistake and the most confusing one to
-read about: `levl_m` is "not found", a plan `FILL_T0` is "for a verb the
-controller does not declare".  This pass looks at the findings about unknown
-names (E0100, E0103, E0104, E0105, E0501) and at syntax errors where an
+read about: `levl_m` is "not found", a verb `GOO` is "not accepted".  This
+pass looks at the findings about unknown names (E0100, E0103, E0104, E0105)
+whose candidates the model knows and at syntax errors where an
 operator of another language was written (`&&`, `||`, `!`, `else if`), and
 adds a help naming the closest declared name or the rcs spelling.  It only
-adds helps; it never changes a finding's code, span or message.
+adds helps; it never changes a finding's code, span or message.  (The
+findings whose guess also stands in for the name, so that no follow-on
+findings are reported, guess where they are made: `Diagnostic.guess`.)
 """
 
 from __future__ import annotations
 
-import difflib
 import re
 
-from rcsc.diagnostics import Diagnostic, Diagnostics
+from rcsc.diagnostics import Diagnostic, Diagnostics, closest
 from rcsc.semantics.model import Design
 
 _QUOTED = re.compile(r"`([^`]*)`")
-
-
-def closest(name: str, candidates) -> str | None:
-    """The declared name closest to `name` (case ignored), if one is close enough."""
-    cands = sorted({c for c in candidates if c and c != name})
-    if not cands:
-        return None
-    lower = {c.lower(): c for c in cands}
-    if name.lower() in lower:
-        return lower[name.lower()]
-    hit = difflib.get_close_matches(name.lower(), list(lower), n=1, cutoff=0.75)
-    return lower[hit[0]] if hit else None
 
 
 def _scope_names(design: Design) -> set[str]:
@@ -63,16 +52,18 @@ def _controller_at(design: Design, d: Diagnostic):
 
 def _candidates(design: Design, d: Diagnostic) -> list[str]:
     quoted = _QUOTED.findall(d.message)
+    if d.code == "E0100" and d.message.startswith("no Global Memory variable"):
+        return list(design.gm)
     if d.code == "E0100":
-        return sorted(_scope_names(design))
+        names = _scope_names(design)
+        # E0100 also says that a declared name is out of reach (not in the
+        # `reads`, used outside a plan): another name is no fix for that.
+        return [] if d.span.text in names else sorted(names)
     if d.code == "E0104":
         return list(design.controllers)
     if d.code == "E0105" and quoted:
         sub = design.controllers.get(quoted[0])
         return list(sub.verbs) if sub else []
-    if d.code == "E0501":
-        c = _controller_at(design, d)
-        return list(c.verbs) if c else []
     if d.code == "E0103" and len(quoted) >= 2:
         owner = quoted[0]
         if d.message.startswith("enum") and owner in design.enums:
@@ -121,11 +112,13 @@ def add_hints(diags: Diagnostics, design: Design | None) -> None:
             if hint is not None:
                 d.helps.insert(0, hint)
             continue
-        if design is None or d.code not in ("E0100", "E0103", "E0104", "E0105", "E0501") or d.span is None:
+        if design is None or d.code not in ("E0100", "E0103", "E0104", "E0105") or d.span is None:
             continue
         name = d.span.text
         if not name.isidentifier():
             continue
+        if d.code == "E0100" and d.message.startswith("cannot find") and d.helps:
+            continue  # the finding already says what the name is (an enum member, a next state, ...)
         best = closest(name, _candidates(design, d))
         if best is not None:
             d.helps.insert(0, f"did you mean `{best}`?")

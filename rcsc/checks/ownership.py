@@ -38,6 +38,9 @@ def check(design: Design, diags: Diagnostics) -> None:
             if use.name in readers:
                 readers[use.name].append((c, use))
 
+    # An instance of a controller type that could not be made (reported) may
+    # be the writer or the reader a variable lacks: nothing is said of those.
+    unmade = any(c.placeholder for c in design.controllers.values())
     for name, var in design.gm.items():
         ws = writers[name]
         if var.from_env and ws:
@@ -50,6 +53,8 @@ def check(design: Design, diags: Diagnostics) -> None:
             diag.with_label(first_use.span, f"first writer `{first_c.name}`").with_note(
                 "every Global Memory variable has exactly one writer"
             )
+        if unmade:
+            continue
         if not ws and not var.from_env:
             if readers[name]:
                 c, use = readers[name][0]

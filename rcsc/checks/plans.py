@@ -16,8 +16,7 @@ from __future__ import annotations
 
 from rcsc.semantics import graphs
 from rcsc.semantics import model as m
-from rcsc.diagnostics import Diagnostics
-from rcsc.checks.hints import closest
+from rcsc.diagnostics import Diagnostics, closest
 from rcsc.semantics.model import Design
 
 MAX_RULES = 10
@@ -177,7 +176,7 @@ def _check_plan(design: Design, c: m.Controller, plan: m.Plan, diags: Diagnostic
     _check_shadowing(plan, states, diags)
     _check_otherwise(plan, diags)
     _check_commands(plan, diags)
-    _check_error_handling(design, c, plan, states, diags)
+    _check_error_handling(design, c, plan, states, reachable, diags)
 
 
 def _check_fail_only(plan: m.Plan, g: StateGraph, reachable: set[str], ends: set[str], diags: Diagnostics) -> None:
@@ -308,8 +307,11 @@ def failure_of(design: Design, sub: str, verb: str) -> str | None:
     return None
 
 
-def _check_error_handling(design: Design, c: m.Controller, plan: m.Plan, states: list[str], diags: Diagnostics) -> None:
-    """E0505, once per plan and subordinate that can fail, at its first wait."""
+def _check_error_handling(design: Design, c: m.Controller, plan: m.Plan, states: list[str], reachable: set[str],
+                          diags: Diagnostics) -> None:
+    """E0505, once per plan and subordinate that can fail, at its first wait
+    in a reachable state (an unreachable one is E0502, often a misspelt name:
+    its waits are not reported besides)."""
     handled: dict[str, set[str]] = {s: set() for s in states}
     for r in plan.rules:
         for view in _subs_in(r.guard, ("error", "error_code")):
@@ -318,7 +320,7 @@ def _check_error_handling(design: Design, c: m.Controller, plan: m.Plan, states:
     waits: dict[str, list[tuple[m.SubView, list[str]]]] = {}
     for r in plan.rules:
         for view in _subs_in(r.guard, WAIT_ATTRS):
-            missing = [s for s in rule_sources(r, states) if view.sub not in handled[s]]
+            missing = [s for s in rule_sources(r, states) if s in reachable and view.sub not in handled[s]]
             if missing:
                 waits.setdefault(view.sub, []).append((view, missing))
     codes = _error_codes(plan) or _error_codes_of(c)

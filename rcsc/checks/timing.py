@@ -45,8 +45,11 @@ def check(design: Design, diags: Diagnostics) -> None:
                 continue
             placed[use.name] = (cpu, use)
             design.controllers[use.name].cpu = cpu.name
+    # A CPU without a schedule (E0209) leaves every controller unplaced: that
+    # one finding says it all.
+    unscheduled_cpu = any(not cpu.schedule for cpu in design.cpus.values())
     for c in design.controllers.values():
-        if c.name not in placed:
+        if c.name not in placed and not unscheduled_cpu:
             diags.add("E0603", c.name_span, f"controller `{c.name}` is not in any CPU schedule", "never runs").with_help(
                 f"add `{c.name}` to a `schedule`"
             )

@@ -28,7 +28,7 @@ from __future__ import annotations
 import dataclasses
 
 from rcsc.front import ast
-from rcsc.diagnostics import Diagnostics
+from rcsc.diagnostics import Diagnostics, closest
 from rcsc.front.source import SourceFile, Span
 
 SEP = "__"  # between a block instance's name and its member's
@@ -114,8 +114,14 @@ def _bind(params, args: list[ast.Arg], what: str, site: ast.Ident, diags: Diagno
             if key not in names:
                 diag = diags.add("E0262", a.name.span, f"{what} has no parameter `{key}`", "unknown parameter")
                 diag.with_note("parameters: " + (", ".join(f"`{n}`" for n in names) or "none"))
-                ok = False
-                continue
+                # A misspelt parameter that no other argument names stands
+                # for it (not also "needs `lo`", and the instance is made).
+                given = {b.name.name for b in args if b.name is not None} | set(bound)
+                meant = diag.guess(key, [n for n in names if n not in given])
+                if meant is None:
+                    ok = False
+                    continue
+                key = meant
         if key in bound:
             diags.add("E0262", a.span, f"parameter `{key}` is given more than once", "repeated argument")
             ok = False
@@ -323,6 +329,9 @@ def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerT
     if t is None:
         diag = diags.add("E0260", item.type_name.span, f"no controller type named `{item.type_name.name}`", "unknown controller type")
         diag.with_note("controller types: " + (", ".join(f"`{n}`" for n in sorted(ctypes)) or "none declared"))
+        meant = diag.guess(item.type_name.name, ctypes)
+        if meant is not None:  # not also "never instantiated" (W0260)
+            used.add(meant)
         return None
     used.add(t.name.name)
     what = f"controller type `{t.name.name}`"
@@ -338,6 +347,15 @@ def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerT
             path = _gm_path(arg.value)
             if path is None:
                 diags.add("E0263", arg.value.span, f"`{p.name.name}` is a `gm` parameter: bind it to a Global Memory variable or field",
+                          "not a Global Memory name").with_label(p.span, "declared `gm` here")
+                ok = False
+                continue
+            root = path[0].name
+            if root not in gm and closest(root, gm) is None:
+                # A constant or another name that is no Global Memory (a
+                # misspelt variable is reported, with its guess, where the
+                # instance `reads` or `writes` it).
+                diags.add("E0263", path[0].span, f"`{p.name.name}` is a `gm` parameter: `{root}` is not a Global Memory variable",
                           "not a Global Memory name").with_label(p.span, "declared `gm` here")
                 ok = False
                 continue
@@ -432,6 +450,9 @@ def _lower_blocks(ctrl: ast.Controller, btypes: dict[str, ast.BlockType], used: 
         if t is None:
             diag = diags.add("E0260", use.type_name.span, f"no block named `{use.type_name.name}`", "unknown block")
             diag.with_note("blocks: " + (", ".join(f"`{n}`" for n in sorted(btypes)) or "none declared") + " (`import std.blocks` for the standard ones)")
+            meant = diag.guess(use.type_name.name, btypes)
+            if meant is not None:  # not also "never instantiated" (W0260)
+                used.add(meant)
             ctrl.poisoned.append(use.name.name)
             continue
         used.add(t.name.name)
@@ -531,6 +552,8 @@ class _UseCopier(_Copier):
                 if mb is None or mb.kind != "input":
                     diag = self.d.add("E0262", a.name.span, f"block `{inst.t.name.name}` has no input `{a.name.name}`", "not an input")
                     diag.with_note("inputs: " + (", ".join(f"`{m.name.name}`" for m in inputs) or "none"))
+                    given = {b.name.name for b in st.call.args if b.name is not None}
+                    diag.guess(a.name.name, [m.name.name for m in inputs if m.name.name not in given])
                     continue
             if mb.name.name in seen:
                 self.d.add("E0262", a.span, f"input `{mb.name.name}` is given more than once", "repeated input")

@@ -10,6 +10,8 @@ the scenario language (`rcsc.front.scenario`) is parsed with it.
 
 from __future__ import annotations
 
+import re
+
 import math
 from functools import lru_cache
 from importlib import resources
@@ -623,8 +625,41 @@ def _syntax_error(parser: Lark, source: SourceFile, exc: UnexpectedInput, diags:
     diag = diags.add("E0001", Span(source, start, end), f"syntax error: unexpected {found}", "unexpected here")
     if expected:
         diag.with_note("expected " + _join(expected))
-    if "`;`" in expected and tok.type != "$END":
+    if tok.type != "$END" and str(tok).isidentifier():
+        # A misspelt keyword (`report` for `reports`, `overheed`): the word
+        # the grammar expected there.
+        words = re.findall(r"`([A-Za-z_]\w*)`", " ".join(expected))
+        if diag.guess(str(tok), words) is not None:
+            return
+    if str(tok) == "(" and _COMMAND_BEFORE.search(text, 0, start) and not _in_plan(text, start):
+        # `SUB.VERB()` in `pre`, `post` or a block's step: only a rule sends commands.
+        diag.with_help("a command is a job of a plan's rule (`E1: condition | S1 -> S2 | SUB.VERB();`), not a statement")
+        return
+    # A rule whose `;` is missing: the next line's start is unexpected.
+    if "`;`" in expected and tok.type != "$END" and "\n" in text[:start][len(text[:start].rstrip()):] and _in_plan(text, start):
         diag.with_help("a rule ends with `;`: `LABEL: condition | state -> next | jobs;`")
+
+
+_PLAN_HEADER = re.compile(r"\s*plan\b")
+_COMMAND_BEFORE = re.compile(r"\b[A-Za-z_]\w*\s*\.\s*[A-Za-z_]\w*\s*\Z")
+
+
+def _in_plan(text: str, pos: int) -> bool:
+    """Whether `pos` lies inside the braces of a `plan` (where a rule ends
+    with `;`): the innermost brace open before it belongs to a line that
+    starts with `plan`.  Braces in comments can mislead it; it only chooses
+    a help."""
+    depth = 0
+    for i in range(pos - 1, -1, -1):
+        ch = text[i]
+        if ch == "}":
+            depth += 1
+        elif ch == "{":
+            if depth == 0:
+                line_start = text.rfind("\n", 0, i) + 1
+                return bool(_PLAN_HEADER.match(text, line_start))
+            depth -= 1
+    return False
 
 
 def _join(words: list[str]) -> str:

@@ -156,9 +156,14 @@ def path_to_files(
     def _import_std(item: ast.Import) -> None:
         res = stdlib_path(item.target)
         if res is None:
-            diags.add("E0005", _target_span(item), f"no standard-library module `{item.target}`", "unknown module").with_note(
+            diag = diags.add("E0005", _target_span(item), f"no standard-library module `{item.target}`", "unknown module").with_note(
                 "the standard library has: " + ", ".join(stdlib_modules())
             )
+            diag.guess(item.target, stdlib_modules())
+            if not item.target.startswith("std."):
+                # A bare name is read as a standard-library module; a file
+                # of the design is imported by its quoted path.
+                diag.with_help(f'to import a file of the design, quote its path: `import "{item.target.replace(".", "/")}.rcs"`')
             return
         key = "<stdlib>/" + item.target
         if key in seen:

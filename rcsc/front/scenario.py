@@ -196,6 +196,14 @@ class _ObserverChecker(Checker):
             return m.Ref(node.span, self.design.gm[node.name].type, "gm", node.name)
         return super().e_Name(node, expected)
 
+    def _unknown_name(self, node: ast.Node, n: str) -> m.Expr:
+        before = len(self.d.items)
+        out = super()._unknown_name(node, n)
+        for d in self.d.items[before:]:
+            if d.code == "E0100" and not d.helps:
+                d.guess(n, [*self.design.gm, *self.g.consts, *self.g.functions, *self.design.controllers])
+        return out
+
     def e_Binary(self, node: ast.Binary, expected: Type | None) -> m.Expr:
         if node.op in ("==", "!="):
             for a, b in ((node.left, node.right), (node.right, node.left)):
@@ -209,6 +217,12 @@ class _ObserverChecker(Checker):
         if not (isinstance(a, ast.Attr) and isinstance(a.obj, ast.Name) and a.attr.name in _SYMBOL_ATTRS and isinstance(b, ast.Name)):
             return None
         ctrl = self.design.controllers.get(a.obj.name)
+        if ctrl is None and a.obj.name not in self.design.gm and a.obj.name not in self.g.consts:
+            # `TBB.state == SPOOLING`: the controller is unknown, so the
+            # state cannot be looked up; it is not also "not found".
+            self.d.add("E0100", a.obj.span, f"cannot find `{a.obj.name}` in this scope", "not found").guess(
+                a.obj.name, self.design.controllers)
+            return m.Const(node.span, ERROR, False)
         if ctrl is None or a.obj.name in self.design.gm:
             return None
         attr, sym = a.attr.name, b.name
@@ -225,7 +239,7 @@ class _ObserverChecker(Checker):
             what = {"state": "state", "status": "status value", "rule": "rule label", "verb": "verb"}[attr]
             self.d.add("E0703", b.span, f"`{ctrl.name}` has no {what} `{sym}`", f"unknown {what}").with_note(
                 f"{what}s of `{ctrl.name}`: " + (", ".join(known) if known else "none")
-            )
+            ).guess(sym, known)
             return m.Const(node.span, ERROR, False)
         return Observed(node.span, BOOL, ctrl.name, attr, sym)
 
@@ -259,6 +273,7 @@ class _ObserverChecker(Checker):
                 "available: status, state, rule, verb, done, error, executing, error_code, echo"
                 + "".join(", " + x for x in list(ctrl.statuses) + list(ctrl.status_fields))
             )
+            diag.guess(attr, [*fixed, *_SYMBOL_ATTRS, *ctrl.statuses, *ctrl.status_fields])
             return m.Const(node.span, ERROR, False)
         return super().e_Attr(node, expected)
 
@@ -279,6 +294,7 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
     cycles_span: Span | None = None
     named: Span | None = None
     sc = Scenario(name, source.path, 0)
+    windows: list[tuple[int, int, Span]] = []  # the cycles `at N` / `within A..B` of the expectations
     for item in items:
         kind = item[0]
         if kind == "name":
@@ -313,6 +329,8 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
             e = observer.condition(cond)
             if when == "within" and lo > hi:
                 diags.add("E0702", wspan, f"empty window: {lo} is after {hi}", "empty window")
+            if when in ("at", "within"):
+                windows.append((lo, hi, wspan))
             sc.expects.append(Expectation(when, lo, hi, e, span, cond.span.text))
     if cycles is None:
         diags.add("E0704", Span(source, 0, 0), "the scenario does not say how many cycles to run", "no `cycles`").with_help(
@@ -330,17 +348,31 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
     sc.cycles = cycles
     for when_cycle, span in [(c.cycle, c.cycle_span or c.span) for c in sc.commands] + [(i.cycle, i.cycle_span or i.span) for i in sc.inputs] + [
         (f.cycle, f.cycle_span or f.span) for f in sc.faults
-    ] + [
-        (e.hi, e.span) for e in sc.expects if e.kind in ("at", "within")
-    ] + [(e.lo, e.span) for e in sc.expects if e.kind in ("at", "within")]:
+    ] + [(hi, wspan) for _, hi, wspan in windows] + [(lo, wspan) for lo, _, wspan in windows]:
         if not 1 <= when_cycle <= cycles:
             diags.add("E0702", span, f"cycle {when_cycle} is outside the scenario's cycles 1..{cycles}", "outside the run")
+    _one_per_cycle(sc, diags)
     if len(diags.errors) > start:
         return None
     sc.commands.sort(key=lambda c: c.cycle)
     sc.inputs.sort(key=lambda i: i.cycle)
     sc.faults.sort(key=lambda f: f.cycle)
     return sc
+
+
+def _one_per_cycle(sc: Scenario, diags: Diagnostics) -> None:
+    """W0706: a second command to one controller, or a second value for one
+    input, at the same cycle (the first would be overwritten unseen)."""
+    first: dict[tuple, Span] = {}
+    for key, span, what in [((c.cycle, "cmd", c.ctrl), c.span, f"`{c.ctrl}` gets a second command") for c in sc.commands] + [
+        ((i.cycle, "in", i.var), i.span, f"`{i.var}` gets a second value") for i in sc.inputs
+    ]:
+        if key in first:
+            diag = diags.add("W0706", span, f"{what} at cycle {key[0]}", "overwrites the first")
+            diag.with_label(first[key], "the first, without effect")
+            diag.with_help("give each its own cycle, or remove the one not meant")
+            continue
+        first[key] = span
 
 
 def _fault(design: m.Design, diags: Diagnostics, span: Span, cycle: int, what: str, target: ast.Ident) -> Fault | None:
@@ -359,7 +391,7 @@ def _fault(design: m.Design, diags: Diagnostics, span: Span, cycle: int, what: s
 def _command(design, checker, diags, span, cycle, cspan, ctrl: ast.Ident, verb: ast.Ident, args) -> Command | None:
     c = design.controllers.get(ctrl.name)
     if c is None:
-        diags.add("E0104", ctrl.span, f"no controller named `{ctrl.name}`", "unknown controller")
+        diags.add("E0104", ctrl.span, f"no controller named `{ctrl.name}`", "unknown controller").guess(ctrl.name, design.controllers)
         return None
     if c.supervisor is not None:
         diags.add("E0700", ctrl.span, f"`{c.name}` takes commands only from its supervisor `{c.supervisor}`", "not the top").with_note(
@@ -370,10 +402,12 @@ def _command(design, checker, diags, span, cycle, cspan, ctrl: ast.Ident, verb: 
     if v is None:
         diags.add("E0105", verb.span, f"`{c.name}` does not accept the verb `{verb.name}`", "unknown verb").with_note(
             f"`{c.name}` accepts: " + (", ".join(c.verbs) if c.verbs else "no verbs")
-        )
+        ).guess(verb.name, c.verbs)
         return None
     checker.s.const_only = True
-    values = checker.match_args([(p.name, p.type) for p in v.params], args, ast.Node(span), f"`{c.name}.{v.name}`")
+    # A wrong number of arguments is shown on the command, not the whole line.
+    call = Span(ctrl.span.file, ctrl.span.start, span.end)
+    values = checker.match_args([(p.name, p.type) for p in v.params], args, ast.Node(call), f"`{c.name}.{v.name}`")
     if values is None:
         return None
     out = {}
@@ -448,7 +482,8 @@ def _constant_value(checker: Checker, e: m.Expr) -> m.Const | None:
 def _input(design, checker, diags, span, cycle, cspan, var: ast.Ident, value: ast.Expr) -> Input | None:
     g = design.gm.get(var.name)
     if g is None:
-        diags.add("E0100", var.span, f"no Global Memory variable named `{var.name}`", "unknown variable")
+        diags.add("E0100", var.span, f"no Global Memory variable named `{var.name}`", "unknown variable").guess(
+            var.name, [n for n, v in design.gm.items() if v.from_env])
         return None
     if not g.from_env:
         diags.add("E0701", var.span, f"`{var.name}` is written by a controller, not by the environment", "not `from env`").with_help(

@@ -390,6 +390,10 @@ class Controller(Fields):
     divider: int = 1  # filled in by the timing check
     period_ns: int = 0  # filled in by the timing check
     doc: str = ""  # the `///` comment before it (rcsc.front.doccomment)
+    # An instance of a controller type that could not be made (reported):
+    # its verbs, status and Global Memory are unknown, so the checks say
+    # nothing about its uses.
+    placeholder: bool = False
 
 
 @dataclass(repr=False, eq=False)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from rcsc.front import ast
 from rcsc.semantics import model as m
-from rcsc.diagnostics import Diagnostics
+from rcsc.diagnostics import Diagnostic, Diagnostics, closest
 from rcsc.front.instantiate import expand
 from rcsc.front.loader import LoadedFile
 from rcsc.front.source import Span
@@ -147,6 +147,7 @@ class _Sema:
             return self._record(n)
         diag = self.d.add("E0102", ref.name.span, f"unknown type `{n}`", "not a type")
         diag.with_note("types: bool, i32, i64, u32, f64, duration, and declared enums and records")
+        diag.guess(n, [*self.g.types, *self.record_ast])
         return ERROR
 
     def array_type(self, ref: ast.TypeRef) -> Type:
@@ -295,6 +296,9 @@ class _Sema:
         level, level_span = self._single(item.level, item, "level", lambda v: v[0], lambda v: v[1])
         budget, budget_span = self._single(item.budget, item, "budget", lambda v: v.nanos, lambda v: v.span)
         c = m.Controller(name, item.span, item.name.span, item.simulator, level or 0, budget or 0, doc=_doc(item))
+        if item.placeholder:
+            c.placeholder = True
+            self.g.poisoned.add(name)
         c.level_span, c.budget_span = level_span, budget_span
         # `period` is optional (default: every cycle of its CPU); the timing
         # check relates it to the CPU's heartbeat once the controller is placed.
@@ -305,11 +309,16 @@ class _Sema:
         c.subordinates = self._names(item.subordinates, "subordinate")
         c.reads = self._names(item.reads, "read")
         c.writes = self._names(item.writes, "write")
-        for use in c.reads + c.writes:
-            if use.name not in self.g.gm:
+        for names in (c.reads, c.writes):
+            for i, use in enumerate(names):
+                if use.name in self.g.gm:
+                    continue
                 diag = self.d.add("E0100", use.span, f"no Global Memory variable named `{use.name}`", "not declared")
-                self.g.poisoned.add(use.name)
                 diag.with_help(f"declare it: `gm {use.name}: TYPE = VALUE`")
+                # Its uses are not reported again (an instance's body uses the
+                # name its argument gave); the name it likely means stands in.
+                self.g.poisoned.add(use.name)
+                names[i] = _meant(use, self.g.gm, names) or use
         checker = Checker(Scope(self.g, const_only=True), self.d)
         for param, arg in item.param_args:  # a controller type's parameters are constants
             pt = self.type_ref(param.type)
@@ -318,13 +327,28 @@ class _Sema:
                 if value is not None:
                     self.check_in_range(value.value, self.range_of(param.type, pt, checker), arg.span, pt)
         verbs = list(item.verbs)
+        set_refs = list(item.verb_sets)
+        for v in item.verbs:
+            n = v.name.name
+            if not v.params and n in self.verbsets and not any(p.name.name == n for p in item.plans):
+                # `verb Lifecycle` for `verbs Lifecycle`: one finding, and the
+                # set's verbs stand in (their plans are not each E0501).
+                self.d.add("E0106", v.name.span, f"`{n}` is a verb set, not a verb", "a verb set").with_help(
+                    f"take its verbs with `verbs {n}`")
+                verbs.remove(v)
+                set_refs.append(v.name)
         uses: list[Span | None] = [None] * len(verbs)
         used_sets: set[str] = set()
-        for ref in item.verb_sets:
+        for ref in set_refs:
             vs = self.verbsets.get(ref.name)
             if vs is None:
-                self.d.add("E0106", ref.span, f"no verb set named `{ref.name}`", "unknown verb set")
-                continue
+                diag = self.d.add("E0106", ref.span, f"no verb set named `{ref.name}`", "unknown verb set")
+                best = diag.guess(ref.name, self.verbsets)
+                if best is None:
+                    continue
+                # The meant set stands in, so its verbs' plans are not each
+                # "for a verb the controller does not declare".
+                ref, vs = ast.Ident(ref.span, best), self.verbsets[best]
             if ref.name in used_sets:  # one finding for the line, not one per verb
                 self.d.add("E0101", ref.span, f"verb set `{ref.name}` is used more than once in `{name}`", "repeated `verbs`")
                 continue
@@ -362,6 +386,17 @@ class _Sema:
                 continue
             if n in c.status_fields or n in c.locals:
                 self.d.add("E0101", decl.name.span, f"`{n}` is defined more than once in `{name}`", f"repeated {what}")
+                continue
+            gm_use = next((u for u in c.reads + c.writes if u.name == n), None)
+            if gm_use is not None:
+                # Inside the controller the bare name would be the field or
+                # the local: the Global Memory variable would silently never
+                # be read or written.
+                access = "writes" if any(u is gm_use for u in c.writes) else "reads"
+                self.d.add("E0101", decl.name.span, f"`{n}` is both a {what} of `{name}` and a Global Memory variable it {access}",
+                           f"{what} named like a Global Memory variable").with_label(gm_use.span, f"`{access}` names it here").with_note(
+                    f"inside `{name}`, `{n}` would name the {what}, never the Global Memory variable").with_help(
+                    f"rename the {what}")
                 continue
             if table is c.status_fields and n in c.statuses:
                 # `C.homed` would name both; readers take the status value.
@@ -480,6 +515,7 @@ class _Sema:
             # other controllers' checks need of them is the summary.
             c.plans = m.ElidedPlans(summary)
             return
+        orphans: list[tuple[str, Diagnostic]] = []  # plans for undeclared verbs
         for plan in item.plans:
             verb_name = plan.name.name
             if verb_name in c.plans:
@@ -489,7 +525,7 @@ class _Sema:
             verb = c.verbs.get(verb_name)
             if verb is None:
                 diag = self.d.add("E0501", plan.name.span, f"plan `{verb_name}` is for a verb `{c.name}` does not declare", "no such verb")
-                diag.with_help(f"declare it: `verb {verb_name}`")
+                orphans.append((verb_name, diag))
                 verb = m.Verb(verb_name, [], plan.name.span)
             c.plans[verb_name] = self.plan(c, verb, plan)
         if self.release_plans:
@@ -497,8 +533,17 @@ class _Sema:
             # go as soon as they are converted keeps the tree and the model
             # from being in memory whole at the same time.
             item.plans = []
+        # A misspelt plan name (`plan ALL_STPO`) is one finding: the verb it
+        # most likely means, among those without a plan, is not also "without
+        # a plan" (E0500).
+        meant: set[str] = set()
+        for verb_name, diag in orphans:
+            best = diag.guess(verb_name, [v for v in c.verbs if v not in c.plans and v not in meant])
+            if best is not None:
+                meant.add(best)
+            diag.with_help(f"declare it: `verb {verb_name}`")
         for v in c.verbs.values():
-            if v.name not in c.plans:
+            if v.name not in c.plans and v.name not in meant:
                 diag = self.d.add("E0500", v.use_span, f"verb `{v.name}` of `{c.name}` has no plan", "no plan for this verb")
                 diag.with_help(f"add `plan {v.name} {{ ... }}` to `{c.name}`")
 
@@ -570,14 +615,32 @@ class _Sema:
                         diag.with_label(first.span, f"first scheduled on `{name}`")
                         continue
                     schedule.append(m.NameUse(ident.name, ident.span))
-            for use in schedule:
+            for i, use in enumerate(schedule):
                 if use.name not in self.g.controllers:
                     self.d.add("E0104", use.span, f"no controller named `{use.name}`", "unknown controller")
+                    schedule[i] = _meant(use, self.g.controllers, schedule) or use
             schedule = [u for u in schedule if u.name in self.g.controllers]
             cpu = m.Cpu(name, item.span, item.name.span, hb.nanos if hb else 0, item.overhead[0].nanos if item.overhead else 0, schedule, doc=_doc(item))
             cpu.heartbeat_span = hb.span if hb else None
             out[name] = cpu
         return out
+
+
+def _meant(use: m.NameUse, declared, listed: list[m.NameUse]) -> m.NameUse | None:
+    """The declared name that an unknown one in a header list (`subordinates`,
+    `reads`, `writes`, `schedule`) most likely misspells, standing at its
+    place, or None.
+
+    The unknown name is reported once (with this guess as its "did you
+    mean", `rcsc.checks.hints`); the checks then go on as if the guess had
+    been written, so the uses of the meant name are not each reported as
+    "not a subordinate", "not in the `reads`" or "not in any schedule".  A
+    guess the list already holds is no guess: the list stays short of it.
+    """
+    best = closest(use.name, declared)
+    if best is None or any(u.name == best for u in listed):
+        return None
+    return m.NameUse(best, use.span)
 
 
 def ast_to_model(files: list[LoadedFile], diags: Diagnostics, release_plans: bool = False,
@@ -600,10 +663,15 @@ def ast_to_model(files: list[LoadedFile], diags: Diagnostics, release_plans: boo
     s.interfaces()
     for name_, item in s.decls.items():  # subordinates that are not controllers
         if isinstance(item, ast.Controller):
-            for use in s.g.controllers[name_].subordinates:
+            subs = s.g.controllers[name_].subordinates
+            for i, use in enumerate(subs):
                 if use.name not in s.g.controllers:
                     s.d.add("E0104", use.span, f"no controller named `{use.name}`", "unknown controller")
-                    s.g.poisoned.add(use.name)
+                    meant = _meant(use, (n for n in s.g.controllers if n != name_), subs)
+                    if meant is None:
+                        s.g.poisoned.add(use.name)
+                    else:
+                        subs[i] = meant
     for c in s.g.controllers.values():
         c.subordinates = [u for u in c.subordinates if u.name in s.g.controllers]
     s.bodies()

@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from rcsc.front import ast
+from rcsc.front.source import Span
 from rcsc.semantics import model as m
 from rcsc.diagnostics import Diagnostics
 from rcsc.semantics.evaluate import Env, NotConstant, eval_expr
@@ -492,6 +493,13 @@ class Checker:
             diag.with_help(f"read a subordinate's status with `{n}.done`, `{n}.error`, ...")
         elif n == "cmd":
             diag.with_help("read a command parameter with `cmd.NAME`")
+        elif owners := [t for t in self.g.types.values() if isinstance(t, EnumType) and n in t.members]:
+            # An enum member is named with its enum (one rule for every enum).
+            diag.with_help("write " + " or ".join(f"`{t.name}.{n}`" for t in owners) + ": a member is named with its enum")
+        elif n in ("done", "error"):
+            # What a rule goes to, not something a condition can test.
+            diag.with_note(f"`{n}` is a next state, written after `->`" + (" as `error(CODE)`" if n == "error" else ""))
+            diag.with_help(f"test a subordinate's status with `SUB.{n}`")
         elif n == "in_state":
             diag.with_note("`in_state` is only available in the rules of a plan")
         elif n == "cycle":
@@ -583,18 +591,44 @@ class Checker:
         self.d.add("E0100", arg.span, f"`age` needs a Global Memory variable or a subordinate; `{n}` is neither", "not a buffer")
         return m.Const(node.span, ERROR, 0)
 
+    def _not_a_subordinate(self, span, sub: str, commanding: bool) -> None:
+        """E0507 for a command to, or a status read of, a controller that the
+        current one does not list in `subordinates`, with the fix that fits
+        where `sub` stands in the hierarchy."""
+        c = self.s.controller
+        assert c is not None
+        if sub == c.name:
+            self.d.add("E0507", span, f"`{sub}` cannot command itself", "itself").with_note(
+                "commands go down the hierarchy, to the controllers in `subordinates`").with_help(
+                "to go on with other work, move to another state of the plan")
+            return
+        diag = self.d.add("E0507", span, f"`{sub}` is not a subordinate of `{c.name}`", "not a subordinate")
+        supervisor = next((o.name for o in self.g.controllers.values() if any(u.name == sub for u in o.subordinates)), None)
+        if any(u.name == c.name for u in self.g.controllers[sub].subordinates):
+            diag.with_note(f"`{sub}` is the supervisor of `{c.name}`: commands go down the hierarchy, status comes up")
+            diag.with_help(f"`{sub}` reads `{c.name}`'s status; share other data through Global Memory")
+        elif supervisor is not None:
+            # Adding it would give it a second supervisor (E0300).
+            diag.with_note(f"`{sub}` is a subordinate of `{supervisor}`; a controller has one supervisor")
+            diag.with_help(f"command `{supervisor}`, which commands `{sub}`" if commanding
+                           else f"read `{supervisor}`'s status, or share the data through Global Memory")
+        elif commanding:
+            diag.with_help(f"add `subordinates {sub}` to `{c.name}`")
+        else:
+            diag.with_help(f"add `subordinates {sub}` to `{c.name}`, or read shared data through Global Memory")
+
     def _sub_view(self, node: ast.Attr, sub: str, attr: str) -> m.Expr:
         c = self.s.controller
         assert c is not None
+        if sub in self.g.poisoned:
+            return m.Const(node.span, ERROR, 0)
         if sub == c.name:
             self.d.add("E0100", node.obj.span, "a controller cannot read its own status this way", "this controller").with_help(
                 "read its status fields by their bare names"
             )
             return m.Const(node.span, ERROR, 0)
         if not any(u.name == sub for u in c.subordinates):
-            self.d.add("E0507", node.obj.span, f"`{sub}` is not a subordinate of `{c.name}`", "not a subordinate").with_help(
-                f"add `subordinates {sub}` to `{c.name}`, or read shared data through Global Memory"
-            )
+            self._not_a_subordinate(node.obj.span, sub, commanding=False)
             return m.Const(node.span, ERROR, 0)
         target = self.g.controllers[sub]
         fixed = {"done": BOOL, "error": BOOL, "executing": BOOL, "error_code": I32, "age": DURATION}
@@ -823,12 +857,14 @@ class Checker:
                 if a.name.name not in names:
                     noun = "field" if what.startswith("record") else "parameter"
                     diag = self.d.add("E0202", a.name.span, f"{what} has no {noun} `{a.name.name}`", f"unknown {noun}")
-                    diag.with_note("parameters: " + ", ".join(names) if names else f"{what} takes no arguments")
+                    diag.with_note(f"{noun}s: " + ", ".join(names) if names else f"{what} takes no arguments")
+                    diag.guess(a.name.name, names)
                     ok = False
                     continue
                 k = names.index(a.name.name)
                 if slots[k] is not None:
-                    self.d.add("E0202", a.name.span, f"parameter `{a.name.name}` given twice", "given again")
+                    noun = "field" if what.startswith("record") else "parameter"
+                    self.d.add("E0202", a.name.span, f"{noun} `{a.name.name}` given twice", "given again")
                     ok = False
                     continue
                 slots[k] = a
@@ -869,6 +905,18 @@ class Checker:
         if isinstance(node, ast.CallStmt):
             e = self.expr(node.call)
             if isinstance(e, m.Call):
+                if e.kind != "extern":
+                    # Only hand-written code can do something besides its value.
+                    # The statement's span, which the parsers give the call too, ends with its `;`.
+                    whole = node.call.span
+                    call = Span(whole.file, whole.start, whole.start + len(whole.text.rstrip().removesuffix(";").rstrip()))
+                    diag = self.d.add("W0213", call, f"the value of `{e.func}(...)` is not used", "value dropped").with_note(
+                        "a function does nothing but compute its value")
+                    first = node.call.args[0].value if node.call.args else None
+                    if isinstance(first, ast.Name):
+                        diag.with_help(f"to change `{first.name}`, assign the value: `{first.name} = {call.text}`")
+                    else:
+                        diag.with_help("assign the value to a variable, or remove the call")
                 return m.CallStmt(node.span, e)
             return None
         if isinstance(node, ast.Command):
@@ -878,6 +926,7 @@ class Checker:
             assert c is not None
             if node.status.name not in c.statuses:
                 diag = self.d.add("E0107", node.status.span, f"`{c.name}` declares no status value `{node.status.name}`", "undeclared status")
+                diag.guess(node.status.name, c.statuses)
                 diag.with_help(f"declare it: `reports {node.status.name}`")
                 return None
             return m.Report(node.span, node.status.name)
@@ -967,9 +1016,7 @@ class Checker:
             self.d.add("E0104", node.sub.span, f"no controller named `{sub}`", "unknown controller")
             return None
         if not any(u.name == sub for u in c.subordinates):
-            self.d.add("E0507", node.sub.span, f"`{sub}` is not a subordinate of `{c.name}`", "not a subordinate").with_help(
-                f"add `subordinates {sub}` to `{c.name}`"
-            )
+            self._not_a_subordinate(node.sub.span, sub, commanding=True)
             return None
         target = self.g.controllers[sub]
         verb = target.verbs.get(node.verb.name)
