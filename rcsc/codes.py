@@ -729,7 +729,10 @@ Global Memory variable, a field of a record whose declaration gives it a range
 condition true and the earlier rules of its state false) the value is outside
 the range. The checks of the receiving plan assume the range (a command with
 x = 20 can leave every rule of `new` false, and the plan sits there for ever),
-so the range must be kept where values enter it.
+so the range must be kept where values enter it. An f64 that can be NaN (a
+failed sensor) is outside every range, and `clamp`, `min` and `max` pass a NaN
+on: when the witness is NaN, test the value in the condition instead
+(`in_range(x, lo, hi)` is false for NaN).
 
 Wrong:
 

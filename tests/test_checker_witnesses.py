@@ -169,3 +169,34 @@ def test_a_real_beyond_the_f64_range_is_an_infinity_in_the_witness(tmp_path) -> 
     (d,) = [d for d in result.diags if d.code == "W0525"]
     assert d.data["witness"] == {"k": 2147483647, "x": float("inf")}
     assert "x = inf" in "\n".join(d.notes)
+
+
+CLAMPED_NAN = """design d
+import std.math
+gm raw: f64 = 0.0 from env
+controller TOP level 2 budget 1 ms {
+    verb GO
+    subordinates AX
+    reads raw
+    plan GO {
+        G0: true    | new -> S1 | AX.MOVE(x = clamp(raw, 0.0, 10.0));
+        G1: AX.done | S1  -> done;
+    }
+}
+controller AX level 1 budget 1 ms {
+    verb MOVE(x: f64 in 0.0..10.0)
+    plan MOVE { M0: true | new -> done; }
+}
+cpu C { heartbeat 10 ms
+ schedule TOP, AX }
+"""
+
+
+def test_a_nan_that_clamp_passes_on_is_not_told_to_clamp(tmp_path: Path) -> None:
+    """A value already clamped can leave its range only as a NaN: the finding
+    says so and does not advise clamping it (which it already is)."""
+    (tmp_path / "d.rcs").write_text(CLAMPED_NAN, encoding="utf-8")
+    found = [d for d in check_path(str(tmp_path / "d.rcs")).diags if d.code == "W0524"]
+    assert len(found) == 1 and found[0].data["witness"] == {"raw": "NaN"}
+    assert any("NaN here" in n for n in found[0].notes), found[0].notes
+    assert "clamp it" not in " ".join(found[0].helps) and "in_range" in " ".join(found[0].helps)

@@ -552,6 +552,7 @@ class _Plan:
             if isinstance(v, (int, float)) and not isinstance(v, bool) and rng.lo <= v <= rng.hi:
                 return
             model, text, data, state = None, f"the value is {format_value(v, t)}", {}, None
+            nan = False
         else:
             value = self._encode(e)
             if value is None or not (isinstance(value, F) or isinstance(t, IntType) or t == DURATION):
@@ -562,11 +563,17 @@ class _Plan:
             text, data = self._witness(model, [e] + ([r.guard] if r.guard is not None else []), r)
             text = "witness: " + text
             state = self.where[self.hit][0]
+            nan = isinstance(value, F) and z3.is_true(model.eval(value.nan, model_completion=True))
         self.reported.add((e.span.start, "range"))
         lo, hi = format_value(rng.lo, t), format_value(rng.hi, t)
         d = self.diags.add("W0524", e.span, f"{what} can be outside its declared range {lo}..{hi}", "out of range")
         d.with_note(text)
-        d.with_help("keep the value in the range (clamp it, or test it in the rule's condition), or widen the range")
+        if nan:
+            # `clamp` (and `min`/`max`) hand a NaN on, so "clamp it" would not help.
+            d.with_note("the value is NaN here: no range holds a NaN, and `clamp`, `min` and `max` pass one on")
+            d.with_help("test the value in the rule's condition (`in_range(x, lo, hi)` is false for NaN), or give the slot another value when it is NaN")
+        else:
+            d.with_help("keep the value in the range (clamp it, or test it in the rule's condition), or widen the range")
         d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data, "range": [rng.lo, rng.hi]}
         if state is not None:
             d.data["state"] = state
