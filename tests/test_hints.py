@@ -93,3 +93,18 @@ def test_else_if_is_elif(tmp_path: Path) -> None:
     text = TYPOS.replace("    verb RUN\n", "    verb RUN\n    pre { if count > 0 { count = 1; } else if count < 0 { count = 2; } }\n")
     helps = _helps(tmp_path, text)
     assert [h[0] for h in helps.values()] == ["rcs writes `elif` for `else if`"], helps
+
+
+def test_elif_in_an_if_expression_is_else_if(tmp_path: Path) -> None:
+    """`elif` inside an `if ... then ... else` expression: the help names the
+    expression's `else if` instead of the rule's `;`, which is not missing."""
+    text = TYPOS.replace("    verb RUN\n", "    verb RUN\n    pre { count = if count > 0 then 1 elif count < 0 then 2 else 0; }\n")
+    helps = _helps(tmp_path, text)
+    assert list(helps.values()) == [[
+        "an `if` expression chains with `else if` (`if a then x else if b then y else z`); `elif` is for `if` statements"]], helps
+
+
+def test_elif_of_an_if_statement_gets_no_expression_hint(tmp_path: Path) -> None:
+    text = TYPOS.replace("    verb RUN\n", "    verb RUN\n    pre { if count > 0 { count = 1; } elif count < 0 { count = 2 } }\n")
+    helps = _helps(tmp_path, text)
+    assert not any("`if` expression" in h for hs in helps.values() for h in hs), helps

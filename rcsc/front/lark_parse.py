@@ -588,6 +588,10 @@ def parse_with(parser: Lark, builder_class: type, source: SourceFile, diags: Dia
     return None if builder.too_deep else result
 
 
+# The help of a syntax error where a `;` could stand: most often a rule's `;` was forgotten.
+RULE_END_HELP = "a rule ends with `;`: `LABEL: condition | state -> next | jobs;`"
+
+
 def _syntax_error(parser: Lark, source: SourceFile, exc: UnexpectedInput, diags: Diagnostics) -> None:
     text = source.text
     if isinstance(exc, UnexpectedCharacters):
@@ -624,7 +628,7 @@ def _syntax_error(parser: Lark, source: SourceFile, exc: UnexpectedInput, diags:
     if expected:
         diag.with_note("expected " + _join(expected))
     if "`;`" in expected and tok.type != "$END":
-        diag.with_help("a rule ends with `;`: `LABEL: condition | state -> next | jobs;`")
+        diag.with_help(RULE_END_HELP)
 
 
 def _join(words: list[str]) -> str:
