@@ -223,9 +223,9 @@ class _ObserverChecker(Checker):
             known = list(ctrl.verbs)
         if sym not in known:
             what = {"state": "state", "status": "status value", "rule": "rule label", "verb": "verb"}[attr]
-            self.d.add("E0703", b.span, f"`{ctrl.name}` has no {what} `{sym}`", f"unknown {what}").with_note(
+            _hint(self.d.add("E0703", b.span, f"`{ctrl.name}` has no {what} `{sym}`", f"unknown {what}").with_note(
                 f"{what}s of `{ctrl.name}`: " + (", ".join(known) if known else "none")
-            )
+            ), sym, known)
             return m.Const(node.span, ERROR, False)
         return Observed(node.span, BOOL, ctrl.name, attr, sym)
 
@@ -255,10 +255,9 @@ class _ObserverChecker(Checker):
                 )
                 return m.Const(node.span, ERROR, False)
             diag = self.d.add("E0103", node.attr.span, f"`{ctrl.name}` has no status `{attr}`", "unknown status")
-            diag.with_note(
-                "available: status, state, rule, verb, done, error, executing, error_code, echo"
-                + "".join(", " + x for x in list(ctrl.statuses) + list(ctrl.status_fields))
-            )
+            available = ["status", "state", "rule", "verb", "done", "error", "executing", "error_code", "echo"]
+            available += list(ctrl.statuses) + list(ctrl.status_fields)
+            _hint(diag.with_note("available: " + ", ".join(available)), attr, available)
             return m.Const(node.span, ERROR, False)
         return super().e_Attr(node, expected)
 
@@ -268,6 +267,7 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
     # Counted before parsing: a finding of the parser that still yields items
     # (a duration finer than 1 ns, E0210) must also stop the scenario.
     start = len(diags.errors)
+    first = len(diags.items)
     items = parse_with(_parser(), _ScenarioAst, source, diags)
     if items is None:
         return None
@@ -335,12 +335,26 @@ def text_to_scenario(source: SourceFile, design: m.Design, diags: Diagnostics) -
     ] + [(e.lo, e.span) for e in sc.expects if e.kind in ("at", "within")]:
         if not 1 <= when_cycle <= cycles:
             diags.add("E0702", span, f"cycle {when_cycle} is outside the scenario's cycles 1..{cycles}", "outside the run")
+    for d in diags.items[first:]:
+        # An unknown name in an expectation (the type checker's E0100): what
+        # an expectation can name is the design's top-level names and controllers.
+        if d.code == "E0100" and not d.helps and d.span is not None and d.span.file is source:
+            _hint(d, d.span.text, [*design.gm, *design.consts, *design.controllers, *design.functions, *design.enums])
     if len(diags.errors) > start:
         return None
     sc.commands.sort(key=lambda c: c.cycle)
     sc.inputs.sort(key=lambda i: i.cycle)
     sc.faults.sort(key=lambda f: f.cycle)
     return sc
+
+
+def _hint(diag, name: str, candidates) -> None:
+    """A "did you mean" help naming the closest of `candidates`, as the design's findings have."""
+    from rcsc.checks.hints import closest
+
+    best = closest(name, candidates)
+    if best is not None:
+        diag.helps.insert(0, f"did you mean `{best}`?")
 
 
 def _fault(design: m.Design, diags: Diagnostics, span: Span, cycle: int, what: str, target: ast.Ident) -> Fault | None:
@@ -352,14 +366,14 @@ def _fault(design: m.Design, diags: Diagnostics, span: Span, cycle: int, what: s
     if target.name in other:
         diag.with_help(f"`{target.name}` is a {'controller' if what == 'stop' else 'CPU'}: write `{'freeze' if what == 'stop' else 'stop'} {target.name}`")
     else:
-        diag.with_note(f"{noun}s: " + ", ".join(table))
+        _hint(diag.with_note(f"{noun}s: " + ", ".join(table)), target.name, table)
     return None
 
 
 def _command(design, checker, diags, span, cycle, cspan, ctrl: ast.Ident, verb: ast.Ident, args) -> Command | None:
     c = design.controllers.get(ctrl.name)
     if c is None:
-        diags.add("E0104", ctrl.span, f"no controller named `{ctrl.name}`", "unknown controller")
+        _hint(diags.add("E0104", ctrl.span, f"no controller named `{ctrl.name}`", "unknown controller"), ctrl.name, design.controllers)
         return None
     if c.supervisor is not None:
         diags.add("E0700", ctrl.span, f"`{c.name}` takes commands only from its supervisor `{c.supervisor}`", "not the top").with_note(
@@ -368,9 +382,9 @@ def _command(design, checker, diags, span, cycle, cspan, ctrl: ast.Ident, verb: 
         return None
     v = c.verbs.get(verb.name)
     if v is None:
-        diags.add("E0105", verb.span, f"`{c.name}` does not accept the verb `{verb.name}`", "unknown verb").with_note(
+        _hint(diags.add("E0105", verb.span, f"`{c.name}` does not accept the verb `{verb.name}`", "unknown verb").with_note(
             f"`{c.name}` accepts: " + (", ".join(c.verbs) if c.verbs else "no verbs")
-        )
+        ), verb.name, c.verbs)
         return None
     checker.s.const_only = True
     values = checker.match_args([(p.name, p.type) for p in v.params], args, ast.Node(span), f"`{c.name}.{v.name}`")
@@ -448,7 +462,8 @@ def _constant_value(checker: Checker, e: m.Expr) -> m.Const | None:
 def _input(design, checker, diags, span, cycle, cspan, var: ast.Ident, value: ast.Expr) -> Input | None:
     g = design.gm.get(var.name)
     if g is None:
-        diags.add("E0100", var.span, f"no Global Memory variable named `{var.name}`", "unknown variable")
+        _hint(diags.add("E0100", var.span, f"no Global Memory variable named `{var.name}`", "unknown variable"), var.name,
+              [n for n, v in design.gm.items() if v.from_env])
         return None
     if not g.from_env:
         diags.add("E0701", var.span, f"`{var.name}` is written by a controller, not by the environment", "not `from env`").with_help(
