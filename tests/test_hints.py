@@ -108,3 +108,13 @@ def test_elif_of_an_if_statement_gets_no_expression_hint(tmp_path: Path) -> None
     text = TYPOS.replace("    verb RUN\n", "    verb RUN\n    pre { if count > 0 { count = 1; } elif count < 0 { count = 2 } }\n")
     helps = _helps(tmp_path, text)
     assert not any("`if` expression" in h for hs in helps.values() for h in hs), helps
+
+
+def test_a_declared_name_missing_from_reads_gets_no_other_name(tmp_path: Path) -> None:
+    """`age(v1_fb)` where `v1_fb` exists but is not in `reads`: the help says to
+    add it to `reads`, and does not guess the similar `v2_fb` (not read either)."""
+    text = TYPOS.replace("gm level_m: f64 = 0.0 from env\n", "gm level_m: f64 = 0.0 from env\ngm v1_fb: i32 = 0 from env\ngm v2_fb: i32 = 0 from env\n")
+    text = text.replace("E0: true | new -> done;\n    }\n    verb RUN", "E0: v1_fb > 0 | new -> done;\n        E1: otherwise | new -> done;\n    }\n    verb RUN")
+    helps = _helps(tmp_path, text)
+    assert not any(h.startswith("did you mean") for h in helps[("E0100", "v1_fb")]), helps[("E0100", "v1_fb")]
+    assert "add `reads v1_fb` to controller `TOP`" in helps[("E0100", "v1_fb")]

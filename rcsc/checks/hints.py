@@ -139,6 +139,9 @@ def add_hints(diags: Diagnostics, design: Design | None) -> None:
         name = d.span.text
         if not name.isidentifier():
             continue
-        best = closest(name, _candidates(design, d))
+        candidates = _candidates(design, d)
+        if name in candidates:
+            continue  # the name exists (not in `reads`, or another controller's): another name would be a wrong guess
+        best = closest(name, candidates)
         if best is not None:
             d.helps.insert(0, f"did you mean `{best}`?")
