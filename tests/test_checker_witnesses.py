@@ -153,12 +153,13 @@ def test_a_real_beyond_the_f64_range_is_an_infinity_in_the_witness(tmp_path) -> 
     src.write_text(
         "design d\n\n"
         "gm x: f64 = 0.0 from env\n\n"
+        "gm n: i32 = 0 from env\n\n"
         "controller TOP level 1 budget 1 ms {\n"
-        "    reads x\n"
+        "    reads x, n\n"
         "    local k: i32 = 0\n"
         "    verb GO\n"
         "    plan GO {\n"
-        "        R0: x / 2.0 > 1.7976931348623157e308 | new -> done | k = k + 1;\n"
+        "        R0: x / 2.0 > 1.7976931348623157e308 | new -> done | k = n + 1;\n"
         "        R1: otherwise | new -> done;\n"
         "    }\n"
         "}\n\n"
@@ -167,7 +168,7 @@ def test_a_real_beyond_the_f64_range_is_an_infinity_in_the_witness(tmp_path) -> 
     )
     result = check_path(str(src))
     (d,) = [d for d in result.diags if d.code == "W0525"]
-    assert d.data["witness"] == {"k": 2147483647, "x": float("inf")}
+    assert d.data["witness"] == {"n": 2147483647, "x": float("inf")}
     assert "x = inf" in "\n".join(d.notes)
 
 
@@ -200,3 +201,41 @@ def test_a_nan_that_clamp_passes_on_is_not_told_to_clamp(tmp_path: Path) -> None
     assert len(found) == 1 and found[0].data["witness"] == {"raw": "NaN"}
     assert any("NaN here" in n for n in found[0].notes), found[0].notes
     assert "clamp it" not in " ".join(found[0].helps) and "in_range" in " ".join(found[0].helps)
+
+
+SHORT_CIRCUIT = """design d
+record Spec { parts: u32 in 1..10 }
+gm k: i32 = 0 from env
+gm a: i32 = 0 from env
+gm flag: bool = false from env
+gm xs: [f64; 3] = [0.0; 3] from env
+gm out: f64 = 0.0 to env
+controller TOP level 1 budget 1 ms {
+    verb RUN(spec: Spec)
+    reads k, a, flag, xs
+    writes out
+    status made: u32 = 0
+    plan RUN ordered {
+        R0: k >= 0 and k < 3 and xs[k] > 1.0 | new -> done | out = if k >= 0 and k < 3 then xs[k] else 0.0;
+        R1: flag and a + 1 >= i32(cmd.spec.parts) | new -> done;
+        R2: made + 1 >= cmd.spec.parts | new -> done | made += 1;
+        R3: otherwise | new -> done;
+    }
+}
+cpu C { heartbeat 10 ms
+ schedule TOP }
+"""
+
+
+def test_value_questions_follow_and_or_and_if(tmp_path: Path) -> None:
+    """`and`, `or` and `if` evaluate a side only when it is needed (docs/language.md,
+    "Order of evaluation"): an index bounded by the left side of an `and` is not
+    W0251, the overflow witness makes the left side true, and it shows no input
+    outside its declared range (a record field's included).  An unranged status
+    field (`made`) holds what earlier cycles made of it: not judged (section 12)."""
+    (tmp_path / "d.rcs").write_text(SHORT_CIRCUIT, encoding="utf-8")
+    found = [d for d in check_path(str(tmp_path / "d.rcs")).diags]
+    assert [d.code for d in found] == ["W0525"], [(d.code, d.message) for d in found]
+    (d,) = found
+    assert d.span.line == 15 and d.data["witness"]["flag"] is True and d.data["witness"]["a"] == 2**31 - 1
+    assert 1 <= d.data["witness"]["cmd.spec.parts"] <= 10
