@@ -805,7 +805,8 @@ Fixed:
     ("W0540", _W, "state can wait forever on a subordinate's held status", """
 A subordinate's status answers the last command it was sent and holds until it
 is commanded again: EXEC while it works, then DONE or ERROR (ERROR only when it
-can fail for that verb). Along the path shown (the rules from `new`), the
+can fail for that verb); a `continuous` plan may instead hold the extra status
+it last reported. Along the path shown (the rules from `new`), the
 subordinates this state reads hold a status for which no rule of the state can
 fire, whatever the inputs that still change: the plan waits forever. Typical
 causes: a state that waits for a new status of a subordinate nobody commanded

@@ -239,3 +239,41 @@ def test_value_questions_follow_and_or_and_if(tmp_path: Path) -> None:
     (d,) = found
     assert d.span.line == 15 and d.data["witness"]["flag"] is True and d.data["witness"]["a"] == 2**31 - 1
     assert 1 <= d.data["witness"]["cmd.spec.parts"] <= 10
+
+
+CONTINUOUS_SUB = """design c
+gm camera_ok: bool = true from env
+controller TOP level 2 budget 1 ms {
+    verb RUN
+    subordinates VISION
+    plan RUN {
+        R0: true             | new     -> LOOKING | VISION.LOOK();
+        R1: VISION.FOUND     | LOOKING -> done;
+        R2: VISION.NOT_FOUND | LOOKING -> error(1);
+    }
+}
+controller VISION level 1 budget 1 ms {
+    verb LOOK
+    reads camera_ok
+    reports FOUND, NOT_FOUND
+    plan LOOK continuous {
+        L0: camera_ok     | new -> SEEN | report FOUND;
+        L1: not camera_ok | new -> SEEN | report NOT_FOUND;
+    }
+}
+cpu C { heartbeat 10 ms
+ schedule TOP, VISION }
+"""
+
+
+def test_a_continuous_subordinate_holds_what_it_reports(tmp_path: Path) -> None:
+    """A continuous plan need not end: VISION holds FOUND or NOT_FOUND, which
+    LOOKING handles, so it is no stall (W0540 said VISION ends in DONE, which
+    its plan never reaches).  Without R1, holding FOUND is a stall, and the
+    finding says what a continuous plan holds."""
+    (tmp_path / "c.rcs").write_text(CONTINUOUS_SUB, encoding="utf-8")
+    assert [d.code for d in check_path(str(tmp_path / "c.rcs")).diags] == []
+    (tmp_path / "c2.rcs").write_text(CONTINUOUS_SUB.replace("        R1: VISION.FOUND     | LOOKING -> done;\n", ""), encoding="utf-8")
+    (d,) = check_path(str(tmp_path / "c2.rcs")).diags
+    assert d.code == "W0540" and d.data["witness"] == {"VISION": "FOUND"} and d.data["replayed"] is True
+    assert "`VISION` is executing `LOOK` sent by `R0`, a continuous plan; then it holds FOUND or NOT_FOUND" in d.notes
