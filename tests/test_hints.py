@@ -118,3 +118,14 @@ def test_a_declared_name_missing_from_reads_gets_no_other_name(tmp_path: Path) -
     helps = _helps(tmp_path, text)
     assert not any(h.startswith("did you mean") for h in helps[("E0100", "v1_fb")]), helps[("E0100", "v1_fb")]
     assert "add `reads v1_fb` to controller `TOP`" in helps[("E0100", "v1_fb")]
+
+
+def test_mismatched_operands_get_helps_that_name_them(tmp_path: Path) -> None:
+    """An `f64` compared with an `i32` constant: the help converts the operands
+    as written (it said "e.g. `f64(x)`", with `x` the f64 side here); a duration
+    compared with a bare number is told to write its unit."""
+    text = TYPOS.replace("E0: true | new -> done;\n    }\n    verb RUN",
+                         "E0: level_m > LIMIT | new -> done;\n        E1: in_state >= 5 | new -> done;\n    }\n    verb RUN")
+    helps = _helps(tmp_path, text)
+    assert helps[("E0200", ">")] == ["convert one side explicitly: `level_m > f64(LIMIT)` or `i32(level_m) > LIMIT`"]
+    assert helps[("E0200", ">=")] == ["a duration is written with its unit (`5 ms`, `2 s`); `seconds(d)` gives a duration as f64 seconds"]

@@ -52,6 +52,8 @@ ARITH_OPS = ("+", "-", "*", "/", "%")
 
 
 @dataclass
+
+
 class Globals:
     """Design-wide names, filled in by rcsc.semantics.sema before bodies are checked."""
 
@@ -692,7 +694,11 @@ class Checker:
             diag = self.d.add("E0200", node.op_span, f"mismatched types: `{lt}` {op} `{rt}`", "operands of different types")
             diag.with_label(node.left.span, f"`{lt}`").with_label(node.right.span, f"`{rt}`")
             if lt.is_numeric and rt.is_numeric:
-                diag.with_help("convert one side explicitly, e.g. `f64(x)`")
+                # Name the operands as written, the conversion to f64 (which loses nothing) first.
+                ways = [f"`{_shown(node.left, op, node.right, None, lt)}`", f"`{_shown(node.left, op, node.right, rt, None)}`"]
+                diag.with_help("convert one side explicitly: " + " or ".join(ways[::-1] if isinstance(rt, FloatType) else ways))
+            elif DURATION in (lt, rt) and (lt.is_numeric or rt.is_numeric):
+                diag.with_help("a duration is written with its unit (`5 ms`, `2 s`); `seconds(d)` gives a duration as f64 seconds")
             return m.Const(node.span, ERROR, 0)
         if arith:
             ok = lt.is_numeric or (lt == DURATION and op in ("+", "-"))
@@ -981,3 +987,12 @@ class Checker:
         if args is None:
             return None
         return m.Command(node.span, sub, verb.name, args, node.sub.span)
+
+
+def _shown(left: ast.Expr, op: str, right: ast.Expr, left_to: Type | None, right_to: Type | None) -> str:
+    """`left op right` with one side converted (`x > f64(K)`), as a help shows it;
+    `...` for an operand too long to repeat."""
+    def text(e: ast.Expr, to: Type | None) -> str:
+        t = e.span.text if len(e.span.text) <= 30 and "\n" not in e.span.text else "..."
+        return f"{to}({t})" if to is not None else t
+    return f"{text(left, left_to)} {op} {text(right, right_to)}"
