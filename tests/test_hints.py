@@ -129,3 +129,13 @@ def test_mismatched_operands_get_helps_that_name_them(tmp_path: Path) -> None:
     helps = _helps(tmp_path, text)
     assert helps[("E0200", ">")] == ["convert one side explicitly: `level_m > f64(LIMIT)` or `i32(level_m) > LIMIT`"]
     assert helps[("E0200", ">=")] == ["a duration is written with its unit (`5 ms`, `2 s`); `seconds(d)` gives a duration as f64 seconds"]
+
+
+@pytest.mark.parametrize("target", ["grid[0].east", "grid[0][1]"])
+def test_an_index_before_a_field_in_an_assignment_is_explained(tmp_path: Path, target: str) -> None:
+    """`a[i].x = v` and `a[i][j] = v` are not assignable (docs/language.md 4.1):
+    the syntax error says the index comes last instead of only "expected `=`"."""
+    text = TYPOS.replace("    verb RUN\n", f"    verb RUN\n    post {{ {target} = 1.0; }}\n")
+    helps = _helps(tmp_path, text)
+    assert [hs[0] for (code, _), hs in helps.items() if code == "E0001"] == [
+        "in an assignment the index comes last (`a[i] = v`, `r.xs[i] = v`): assign the whole element (`a[i] = P(...)`)"], helps

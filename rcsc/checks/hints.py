@@ -110,6 +110,8 @@ def _syntax_hint(d: Diagnostic) -> str | None:
     before = text[max(0, at - 40):at].rstrip()
     if text.startswith("if", at) and before.endswith("else"):
         return "rcs writes `elif` for `else if`"
+    if text.startswith((".", "["), at) and text[:at].rstrip().endswith("]") and any("`=`" in n for n in d.notes):
+        return "in an assignment the index comes last (`a[i] = v`, `r.xs[i] = v`): assign the whole element (`a[i] = P(...)`)"
     if re.match(r"elif\b", text[at:]) and _in_if_expression(text, at):
         return "an `if` expression chains with `else if` (`if a then x else if b then y else z`); `elif` is for `if` statements"
     return None
