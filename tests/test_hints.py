@@ -139,3 +139,15 @@ def test_an_index_before_a_field_in_an_assignment_is_explained(tmp_path: Path, t
     helps = _helps(tmp_path, text)
     assert [hs[0] for (code, _), hs in helps.items() if code == "E0001"] == [
         "in an assignment the index comes last (`a[i] = v`, `r.xs[i] = v`): assign the whole element (`a[i] = P(...)`)"], helps
+
+
+def test_error_code_of_a_subordinate_is_not_a_constant(tmp_path: Path) -> None:
+    """`error(LOW.error_code)`: `LOW` exists (it was "cannot find `LOW`"); the
+    finding says an error code is a constant and how to pass a code up."""
+    text = TYPOS.replace("E9: LOW.error | * -> error(1);", "E9: LOW.error | * -> error(LOW.error_code);")
+    path = tmp_path / "d.rcs"
+    path.write_text(text, encoding="utf-8")
+    found = [d for d in check_path(str(path)).diags if d.span is not None and d.span.text == "LOW" and d.span.line == 18]
+    assert [d.code for d in found] == ["E0204"], [(d.code, d.message) for d in found]
+    assert found[0].message == "`LOW` is a controller, whose status is known only when the design runs: a constant expression cannot read it"
+    assert any("copy it (`SUB.error_code`) into a status field" in h for h in found[0].helps)

@@ -478,12 +478,23 @@ class Checker:
         if n in self.g.poisoned:
             return m.Const(node.span, ERROR, 0)
         s = self.s
-        if s.const_only and (n in self.g.gm or n in self.g.variables
+        if s.const_only and (n in self.g.gm or n in self.g.variables or n in self.g.controllers or n == "cmd"
                              or (s.controller and (n in s.controller.locals or n in s.controller.status_fields))):
-            # The name is known: what is wrong is reading a variable where a
-            # value must be known before the design runs.
-            what = "a Global Memory variable" if n in self.g.gm else self.g.variables.get(n, "a variable of the controller")
-            self.d.add("E0204", node.span, f"`{n}` is {what}: a constant expression cannot read it", "a variable").with_note(
+            # The name is known: what is wrong is reading a variable (or a
+            # controller's status, or the command) where a value must be known
+            # before the design runs.
+            if n in self.g.gm:
+                what = "a Global Memory variable"
+            elif n in self.g.variables:
+                what = self.g.variables[n]
+            elif s.controller and (n in s.controller.locals or n in s.controller.status_fields):
+                what = "a variable of the controller"
+            elif n == "cmd":
+                what = "the running command"
+            else:
+                what = "a controller, whose status is known only when the design runs"
+            label = "known only at run time" if n in self.g.controllers or n == "cmd" else "a variable"
+            self.d.add("E0204", node.span, f"`{n}` is {what}: a constant expression cannot read it", label).with_note(
                 "constants, initial values, ranges and scenario values are known before the design runs: "
                 "literals, constants, enum members and arithmetic on them")
             return m.Const(node.span, ERROR, 0)
