@@ -127,6 +127,11 @@ def test_doc_comments_on_controller_types_instances_and_blocks(tmp_path) -> None
     assert ctrls["X"].doc == "The first." and ctrls["Y"].doc == "One output."
     assert ctrls["Y"].verbs["GO"].doc == "Its verb."
     assert ctrls["X"].status_fields["k__y"].doc == "What goes out." and ctrls["X"].locals["k__x"].doc == "What comes in."
+    from rcsc.editor import symbols
+
+    idx = symbols.build([text_to_ast(src, Diagnostics())])
+    assert symbols.hover_text(idx.controllers["X"]).endswith("\n\nThe first.")
+    assert symbols.hover_text(idx.controllers["Y"]).endswith("\n\nOne output.")
 
 
 def test_doc_comments_reach_the_generated_code_sanitised(tmp_path) -> None:
