@@ -760,7 +760,10 @@ Global Memory variable, a field of a record whose declaration gives it a range
 condition true and the earlier rules of its state false) the value is outside
 the range. The checks of the receiving plan assume the range (a command with
 x = 20 can leave every rule of `new` false, and the plan sits there for ever),
-so the range must be kept where values enter it.
+so the range must be kept where values enter it. An f64 that can be NaN (a
+failed sensor) is outside every range, and `clamp`, `min` and `max` pass a NaN
+on: when the witness is NaN, test the value in the condition instead
+(`in_range(x, lo, hi)` is false for NaN).
 
 Wrong:
 
@@ -833,7 +836,8 @@ Fixed:
     ("W0540", _W, "state can wait forever on a subordinate's held status", """
 A subordinate's status answers the last command it was sent and holds until it
 is commanded again: EXEC while it works, then DONE or ERROR (ERROR only when it
-can fail for that verb). Along the path shown (the rules from `new`), the
+can fail for that verb); a `continuous` plan may instead hold the extra status
+it last reported. Along the path shown (the rules from `new`), the
 subordinates this state reads hold a status for which no rule of the state can
 fire, whatever the inputs that still change: the plan waits forever. Typical
 causes: a state that waits for a new status of a subordinate nobody commanded

@@ -65,17 +65,26 @@ def cpu_count(design: Path) -> int:
     return len(re.findall(r"^cpu\s+\w+\s*\{", design.read_text(encoding="utf-8"), re.M))
 
 
+# The designs with a `scenarios/` folder beside them: the examples, and the
+# designs written from the docs alone, as a new user would (tests/designs).
+DESIGN_GLOBS = ("examples/*/*.rcs", "tests/designs/*/*.rcs")
+
+
+def example_designs() -> list[Path]:
+    return sorted(p for g in DESIGN_GLOBS for p in ROOT.glob(g))
+
+
 def multi_cpu_examples() -> list[tuple[Path, Path]]:
     """(design, scenario) for every example scenario of a design with several CPUs:
     tests/test_multicpu_targets.py runs them (one process per CPU, the launcher)."""
-    return [(d, s) for d in sorted(ROOT.glob("examples/*/*.rcs")) if cpu_count(d) > 1 for s in sorted((d.parent / "scenarios").glob("*.scn"))]
+    return [(d, s) for d in example_designs() if cpu_count(d) > 1 for s in sorted((d.parent / "scenarios").glob("*.scn"))]
 
 
 def _examples() -> list[tuple[Path, Path]]:
     """(design, scenario) for every example scenario of a single-CPU design and the simulator's test designs
     (the multi-CPU examples: `multi_cpu_examples`)."""
     pairs = []
-    for design in sorted(ROOT.glob("examples/*/*.rcs")):
+    for design in example_designs():
         if cpu_count(design) > 1:
             continue  # one program per CPU: tests/test_multicpu_targets.py
         for scn in sorted((design.parent / "scenarios").glob("*.scn")):

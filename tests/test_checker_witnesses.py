@@ -153,12 +153,13 @@ def test_a_real_beyond_the_f64_range_is_an_infinity_in_the_witness(tmp_path) -> 
     src.write_text(
         "design d\n\n"
         "gm x: f64 = 0.0 from env\n\n"
+        "gm n: i32 = 0 from env\n\n"
         "controller TOP level 1 budget 1 ms {\n"
-        "    reads x\n"
+        "    reads x, n\n"
         "    local k: i32 = 0\n"
         "    verb GO\n"
         "    plan GO {\n"
-        "        R0: x / 2.0 > 1.7976931348623157e308 | new -> done | k = k + 1;\n"
+        "        R0: x / 2.0 > 1.7976931348623157e308 | new -> done | k = n + 1;\n"
         "        R1: otherwise | new -> done;\n"
         "    }\n"
         "}\n\n"
@@ -167,5 +168,112 @@ def test_a_real_beyond_the_f64_range_is_an_infinity_in_the_witness(tmp_path) -> 
     )
     result = check_path(str(src))
     (d,) = [d for d in result.diags if d.code == "W0525"]
-    assert d.data["witness"] == {"k": 2147483647, "x": float("inf")}
+    assert d.data["witness"] == {"n": 2147483647, "x": float("inf")}
     assert "x = inf" in "\n".join(d.notes)
+
+
+CLAMPED_NAN = """design d
+import std.math
+gm raw: f64 = 0.0 from env
+controller TOP level 2 budget 1 ms {
+    verb GO
+    subordinates AX
+    reads raw
+    plan GO {
+        G0: true    | new -> S1 | AX.MOVE(x = clamp(raw, 0.0, 10.0));
+        G1: AX.done | S1  -> done;
+    }
+}
+controller AX level 1 budget 1 ms {
+    verb MOVE(x: f64 in 0.0..10.0)
+    plan MOVE { M0: true | new -> done; }
+}
+cpu C { heartbeat 10 ms
+ schedule TOP, AX }
+"""
+
+
+def test_a_nan_that_clamp_passes_on_is_not_told_to_clamp(tmp_path: Path) -> None:
+    """A value already clamped can leave its range only as a NaN: the finding
+    says so and does not advise clamping it (which it already is)."""
+    (tmp_path / "d.rcs").write_text(CLAMPED_NAN, encoding="utf-8")
+    found = [d for d in check_path(str(tmp_path / "d.rcs")).diags if d.code == "W0524"]
+    assert len(found) == 1 and found[0].data["witness"] == {"raw": "NaN"}
+    assert any("NaN here" in n for n in found[0].notes), found[0].notes
+    assert "clamp it" not in " ".join(found[0].helps) and "in_range" in " ".join(found[0].helps)
+
+
+SHORT_CIRCUIT = """design d
+record Spec { parts: u32 in 1..10 }
+gm k: i32 = 0 from env
+gm a: i32 = 0 from env
+gm flag: bool = false from env
+gm xs: [f64; 3] = [0.0; 3] from env
+gm out: f64 = 0.0 to env
+controller TOP level 1 budget 1 ms {
+    verb RUN(spec: Spec)
+    reads k, a, flag, xs
+    writes out
+    status made: u32 = 0
+    plan RUN ordered {
+        R0: k >= 0 and k < 3 and xs[k] > 1.0 | new -> done | out = if k >= 0 and k < 3 then xs[k] else 0.0;
+        R1: flag and a + 1 >= i32(cmd.spec.parts) | new -> done;
+        R2: made + 1 >= cmd.spec.parts | new -> done | made += 1;
+        R3: otherwise | new -> done;
+    }
+}
+cpu C { heartbeat 10 ms
+ schedule TOP }
+"""
+
+
+def test_value_questions_follow_and_or_and_if(tmp_path: Path) -> None:
+    """`and`, `or` and `if` evaluate a side only when it is needed (docs/language.md,
+    "Order of evaluation"): an index bounded by the left side of an `and` is not
+    W0251, the overflow witness makes the left side true, and it shows no input
+    outside its declared range (a record field's included).  An unranged status
+    field (`made`) holds what earlier cycles made of it: not judged (section 12)."""
+    (tmp_path / "d.rcs").write_text(SHORT_CIRCUIT, encoding="utf-8")
+    found = [d for d in check_path(str(tmp_path / "d.rcs")).diags]
+    assert [d.code for d in found] == ["W0525"], [(d.code, d.message) for d in found]
+    (d,) = found
+    assert d.span.line == 15 and d.data["witness"]["flag"] is True and d.data["witness"]["a"] == 2**31 - 1
+    assert 1 <= d.data["witness"]["cmd.spec.parts"] <= 10
+
+
+CONTINUOUS_SUB = """design c
+gm camera_ok: bool = true from env
+controller TOP level 2 budget 1 ms {
+    verb RUN
+    subordinates VISION
+    plan RUN {
+        R0: true             | new     -> LOOKING | VISION.LOOK();
+        R1: VISION.FOUND     | LOOKING -> done;
+        R2: VISION.NOT_FOUND | LOOKING -> error(1);
+    }
+}
+controller VISION level 1 budget 1 ms {
+    verb LOOK
+    reads camera_ok
+    reports FOUND, NOT_FOUND
+    plan LOOK continuous {
+        L0: camera_ok     | new -> SEEN | report FOUND;
+        L1: not camera_ok | new -> SEEN | report NOT_FOUND;
+    }
+}
+cpu C { heartbeat 10 ms
+ schedule TOP, VISION }
+"""
+
+
+def test_a_continuous_subordinate_holds_what_it_reports(tmp_path: Path) -> None:
+    """A continuous plan need not end: VISION holds FOUND or NOT_FOUND, which
+    LOOKING handles, so it is no stall (W0540 said VISION ends in DONE, which
+    its plan never reaches).  Without R1, holding FOUND is a stall, and the
+    finding says what a continuous plan holds."""
+    (tmp_path / "c.rcs").write_text(CONTINUOUS_SUB, encoding="utf-8")
+    assert [d.code for d in check_path(str(tmp_path / "c.rcs")).diags] == []
+    (tmp_path / "c2.rcs").write_text(CONTINUOUS_SUB.replace("        R1: VISION.FOUND     | LOOKING -> done;\n", ""), encoding="utf-8")
+    (d,) = check_path(str(tmp_path / "c2.rcs")).diags
+    assert d.code == "W0540" and d.data["witness"] == {"VISION": "FOUND"} and d.data["replayed"] is True
+    assert "`VISION` is executing `LOOK` sent by `R0`, a continuous plan; then it holds FOUND or NOT_FOUND" in d.notes

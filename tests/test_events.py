@@ -138,6 +138,17 @@ def test_expectations_see_what_the_simulator_sees_on_every_target(target: str, t
     assert untimed(out) == untimed(sim[1])
 
 
+@pytest.mark.parametrize("target", ["c", "rust"])
+def test_a_relative_build_dir_builds_and_runs(target: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`rcsc test --target rust` with a relative build folder (the default is
+    `build/rcsc-test`) found no program: cargo ran inside the build folder and
+    took the relative CARGO_TARGET_DIR from there."""
+    monkeypatch.chdir(tmp_path)
+    rc, out, _ = rcsc("test", "--target", target, "--build-dir", "b", str(ROOT / "tests/params/array_params.rcs"))
+    assert rc == 0 and out.endswith("1 passed, 0 failed\n"), out
+    assert not list((tmp_path / "b").glob("*/b")), "nothing is built inside the build folder"
+
+
 def test_a_failing_scenario_fails_on_c_and_rust_and_the_build_is_reused(tmp_path: Path) -> None:
     folder = tmp_path / "sub"
     (folder / "scenarios").mkdir(parents=True)

@@ -1,6 +1,7 @@
 """The example designs are clean and their scenarios pass.
 
-For every example design (`examples/*/*.rcs` that begins with `design`):
+For every example design (`examples/*/*.rcs` and `tests/designs/*/*.rcs`
+that begins with `design`):
 
 - `rcsc check --deny-warnings` exits 0: an example must not teach a warning;
 - `rcsc test <its folder>` runs at least three scenarios and passes them all
@@ -22,12 +23,17 @@ from pathlib import Path
 
 import pytest
 
+from c_build import example_designs
+
 from rcsc.cli import main
 from rcsc.sim.testrun import is_design_file, scenarios_of
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
-DESIGNS = sorted(p for p in EXAMPLES.glob("*/*.rcs") if is_design_file(str(p)))
+# The examples, and the designs of tests/designs (c_build.DESIGN_GLOBS):
+# written from docs/ alone, as a new user would (a robot work cell, a
+# pick-and-place, a tank farm, a mobile robot), held to the same standard.
+DESIGNS = [p for p in example_designs() if is_design_file(str(p))]
 MIN_SCENARIOS = 3
 
 

@@ -117,6 +117,18 @@ def test_state_table_is_aligned_in_columns_and_comments_stay() -> None:
     )
 
 
+def test_a_plan_closed_on_its_last_rule_line_keeps_the_depth() -> None:
+    """`R1: ... | S -> done; }` closes the plan on a rule's line: what follows
+    was indented one level too deep (the controller's `}` and the next CPU)."""
+    text = ("design f\ncontroller TOP level 1 budget 1 ms {\n  verb RUN\n  plan RUN {\n  R0: true | new -> S;\n"
+            "  R1: true | S -> done; }\n  verb GO\n  plan GO { G0: true | new -> done; }\n}\ncpu C { heartbeat 10 ms schedule TOP }\n")
+    got = format_text(text)
+    assert got.splitlines()[-5:] == ["        R1: true | S -> done; }", "    verb GO", "    plan GO { G0: true | new -> done; }", "}",
+                                     "cpu C { heartbeat 10 ms schedule TOP }"], got
+    assert format_text(got) == got
+    assert shape(text_to_ast(SourceFile("a.rcs", got), Diagnostics())) == shape(text_to_ast(SourceFile("b.rcs", text), Diagnostics()))
+
+
 def test_examples_and_stdlib_are_formatted(capsys) -> None:
     assert cli.main(["fmt", "--check", str(ROOT / "examples"), str(ROOT / "stdlib")]) == 0
     assert "0 files would be reformatted" in capsys.readouterr().err

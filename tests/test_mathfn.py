@@ -81,6 +81,59 @@ def test_doc_comments_are_the_same_in_both_parsers_and_documents_nothing_is_w024
         assert codes == ["W0240"], codes
 
 
+TYPED_DOCS = """design d
+gm a: f64 = 0.0 to env
+gm b: f64 = 0.0 to env
+/// One output.
+controller type T(out: gm) level 1 budget 1 ms {
+    writes out
+    /// Its verb.
+    verb GO
+    block k: B(g = 2.0)
+    post { k(x = 1.0); out = k.y; }
+    plan GO { R: true | new -> done; }
+}
+/// The first.
+controller X: T(out = a)
+controller Y: T(out = b)
+/// Scales its input.
+block B(g: f64) {
+    /// What comes in.
+    input x: f64 = 0.0
+    /// What goes out.
+    output y: f64 = 0.0
+    step { y = g * x; }
+}
+controller TOP level 2 budget 1 ms { subordinates X, Y }
+cpu C { heartbeat 10 ms
+ schedule TOP, X, Y }
+"""
+
+
+def test_doc_comments_on_controller_types_instances_and_blocks(tmp_path) -> None:
+    """`///` before a controller type, an instance, a block and its members
+    documents them (it was W0240 "documents nothing"): an instance shows its
+    own text, or else its type's, and a block's members reach the fields."""
+    from rcsc.driver import check_path
+
+    src = SourceFile("d.rcs", TYPED_DOCS)
+    d1, d2 = Diagnostics(), Diagnostics()
+    assert text_to_ast(src, d1) == text_to_ast_lark(src, d2)
+    assert [x.code for x in d1] == [] and [x.code for x in d2] == []
+    (tmp_path / "d.rcs").write_text(TYPED_DOCS)
+    result = check_path(str(tmp_path / "d.rcs"))
+    assert "W0240" not in {x.code for x in result.diags}
+    ctrls = result.model.controllers
+    assert ctrls["X"].doc == "The first." and ctrls["Y"].doc == "One output."
+    assert ctrls["Y"].verbs["GO"].doc == "Its verb."
+    assert ctrls["X"].status_fields["k__y"].doc == "What goes out." and ctrls["X"].locals["k__x"].doc == "What comes in."
+    from rcsc.editor import symbols
+
+    idx = symbols.build([text_to_ast(src, Diagnostics())])
+    assert symbols.hover_text(idx.controllers["X"]).endswith("\n\nThe first.")
+    assert symbols.hover_text(idx.controllers["Y"]).endswith("\n\nOne output.")
+
+
 def test_doc_comments_reach_the_generated_code_sanitised(tmp_path) -> None:
     from c_build import ROOT, generate
 

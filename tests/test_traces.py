@@ -115,6 +115,30 @@ def test_scenario_errors_are_diagnostics(capsys, tmp_path: Path) -> None:
     assert "Traceback" not in err
 
 
+def test_misspelt_names_in_a_scenario_get_the_closest_declared_name(capsys, tmp_path: Path) -> None:
+    """A scenario's unknown names get the "did you mean" of a design's (a
+    controller, a verb, an input, a CPU, a state, a status, a name in an
+    expectation); a name close to nothing gets none."""
+    bad = tmp_path / "bad.scn"
+    bad.write_text(
+        "cycles 5\nat 1: PRR.AHEAD(speed = 3)\nat 1: PR.AHAED(speed = 3)\nat 1: ship_dri = ShipDir.AHEAD\nat 2: stop MAINN\n"
+        "expect at 2: PR.state == S11\nexpect at 2: PR.prop_sped == 1\nexpect at 2: PR.verb == AHED\nexpect at 2: speed_stats == SpeedStatus.AT\n"
+        "expect at 2: PR.AT_GAOL\nexpect at 2: zebra\n"
+    )
+    code = main(["sim", DESIGN, "--scenario", str(bad)])
+    err = capsys.readouterr().err
+    assert code == 1
+    helps = {}
+    for block in ("\n" + err).split("\nerror[")[1:]:
+        line = int(block.split("bad.scn:", 1)[1].split(":", 1)[0])
+        helps[(block[:5], line)] = [x.split("= help: ", 1)[1] for x in block.splitlines() if "= help: " in x]
+    expected = {("E0104", 2): "PR", ("E0105", 3): "AHEAD", ("E0100", 4): "ship_dir", ("E0705", 5): "MAIN", ("E0703", 6): "S1",
+                ("E0103", 7): "prop_speed", ("E0703", 8): "AHEAD", ("E0100", 9): "speed_status", ("E0103", 10): "AT_GOAL"}
+    for key, name in expected.items():
+        assert helps[key][:1] == [f"did you mean `{name}`?"], (key, helps)
+    assert not any(h.startswith("did you mean") for h in helps[("E0100", 11)])
+
+
 def test_rcsc_test_reports_and_writes_junit(capsys, tmp_path: Path) -> None:
     folder = tmp_path / "proj"
     folder.mkdir()

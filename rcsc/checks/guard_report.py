@@ -10,6 +10,7 @@ from rcsc.semantics.model import Design
 from rcsc.checks.smt import format_value, json_value
 from rcsc.checks.guard_analysis import HELD_QUESTION, RLIMIT, TIMEOUT_MS, _difference, _Finding, _name_type, _next_text
 from rcsc.checks.guard_replay import _replays
+from rcsc.checks.plans import failure_of, held_statuses
 
 
 def _reason_text(reason: str) -> str:
@@ -157,11 +158,17 @@ _HELD_TEXT = {
 }
 
 
-def _held_text(plan: m.Plan, sub: str, kind: str, by: int) -> str:
+def _held_text(design: Design, plan: m.Plan, sub: str, kind: str, by: int) -> str:
     if by < 0 and kind in ("done", "error"):
         return f"`{sub}` holds {kind.upper()} left over from an earlier command: this plan did not command it on this path"
     label = plan.rules[by].label if by >= 0 else "?"
     verb = next((j.verb for j in m.walk_stmts(plan.rules[by].jobs) if isinstance(j, m.Command) and j.sub == sub), "?") if by >= 0 else "?"
+    holds = held_statuses(design, sub, verb) if kind == "run" and verb != "?" else None
+    if holds is not None:
+        # A continuous plan need not end: it holds what its last rule left.
+        held = [x for x in holds if x != "EXEC"] + (["ERROR"] if failure_of(design, sub, verb) is not None else [])
+        then = (["holds " + " or ".join(held)] if held else []) + (["stays executing"] if "EXEC" in holds or not held else [])
+        return f"`{sub}` is executing `{verb}` sent by `{label}`, a continuous plan; then it " + ", or ".join(then)
     return _HELD_TEXT[kind].format(sub=sub, by=label, verb=verb)
 
 
@@ -175,7 +182,7 @@ def _report_held(design: Design, c: m.Controller, plan: m.Plan, f: _Finding, dia
     data["path"] = [rules[i].label for i in f.path]
     data["held"] = {k[1]: v[0] for k, v in f.held.items()}
     data["commanded_by"] = {k[1]: (rules[v[1]].label if v[1] >= 0 else None) for k, v in f.held.items()}
-    held_notes = [_held_text(plan, k[1], v[0], v[1]) for k, v in f.held.items()]
+    held_notes = [_held_text(design, plan, k[1], v[0], v[1]) for k, v in f.held.items()]
     if f.code == "W0540":
         own = [i for i in f.rules if rules[i].state.kind == "named"]
         main = rules[(own or f.rules)[0]]

@@ -2,7 +2,9 @@
 
 A subordinate's status answers the last command it was sent and stays until
 it is commanded again: EXEC while it works, then DONE or ERROR (ERROR only if
-it can fail for that verb, `rcsc.checks.plans.failure_of`), held.  The guard
+it can fail for that verb, `rcsc.checks.plans.failure_of`), held; a
+`continuous` plan may instead never end, holding EXEC or an extra status it
+reports (`rcsc.checks.plans.held_statuses`).  The guard
 analysis (`rcsc.checks.guards`) treats a subordinate's view as an input that
 can take any value in any cycle; this module follows the plan's paths
 instead.  For every state it computes the *contexts* in which the plan can be
@@ -53,11 +55,12 @@ import z3
 from rcsc.semantics import model as m
 from rcsc.checks.guard_analysis import rule_vector
 from rcsc.checks.smt import neg
-from rcsc.checks.plans import DONE, ERROR, failure_of, rule_target
+from rcsc.checks.plans import DONE, ERROR, failure_of, held_statuses, rule_target
 
 MAX_CONTEXTS = 32  # per state
 MAX_NODES = 2000  # per plan
 WAIT_ATTRS = ("done", "status", "executing")
+_VIEW_OF = {"DONE": "done"}  # a status's name -> its member of a subordinate's view
 
 
 class TooMany(Exception):
@@ -114,6 +117,7 @@ class Held:
         self.view = {s: an.enc.inputs[("view", s)].term for s in self.subs}
         self.lit: dict[tuple[str, int], z3.BoolRef] = {}  # made when a question first pins a view
         self.fail: dict[tuple[str, str | None], bool] = {}
+        self.holding: dict[tuple[str, str | None], list[str] | None] = {}
         self.models: list[list] = []  # [rule vector, view values (None: not read yet), z3 model] of each model found
         self.memo: dict = {}
         self.seen = 0  # how many of the guard analysis's models are in `models`
@@ -153,10 +157,20 @@ class Held:
             return None
         if p.kind != "run":
             return frozenset([mem.index(p.kind)])
-        out = {mem.index("done")}
+        holds = self.holds(sub, p.verb)
+        # A continuous plan need not end: it holds the status its last rule
+        # reported.  One that stays executing (a regulator, a stub) is still
+        # at work, so EXEC is not a status the plan could wait on for ever.
+        out = {mem.index("done")} if holds is None else {mem.index(_VIEW_OF.get(x, x)) for x in holds if x != "EXEC"}
         if self.can_fail(sub, p.verb):
             out.add(mem.index("error"))
         return frozenset(out)
+
+    def holds(self, sub: str, verb: str | None) -> list[str] | None:
+        key = (sub, verb)
+        if key not in self.holding:
+            self.holding[key] = None if verb is None else held_statuses(self.an.design, sub, verb)
+        return self.holding[key]
 
     @staticmethod
     def cls(members: tuple[str, ...], i: int) -> str:

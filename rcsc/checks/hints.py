@@ -101,7 +101,17 @@ def _syntax_hint(d: Diagnostic) -> str | None:
     before = text[max(0, at - 40):at].rstrip()
     if text.startswith("if", at) and before.endswith("else"):
         return "rcs writes `elif` for `else if`"
+    if text.startswith((".", "["), at) and text[:at].rstrip().endswith("]") and any("`=`" in n for n in d.notes):
+        return "in an assignment the index comes last (`a[i] = v`, `r.xs[i] = v`): assign the whole element (`a[i] = P(...)`)"
+    if re.match(r"elif\b", text[at:]) and _in_if_expression(text, at):
+        return "an `if` expression chains with `else if` (`if a then x else if b then y else z`); `elif` is for `if` statements"
     return None
+
+
+def _in_if_expression(text: str, at: int) -> bool:
+    """Whether `at` follows a `then` of the statement, condition or argument it is in."""
+    start = max(text.rfind(c, 0, at) for c in ";{}|")
+    return re.search(r"\bthen\b", text[start + 1:at]) is not None
 
 
 def add_hints(diags: Diagnostics, design: Design | None) -> None:
@@ -110,7 +120,12 @@ def add_hints(diags: Diagnostics, design: Design | None) -> None:
         if d.code in ("E0001", "E0002"):
             hint = _syntax_hint(d)
             if hint is not None:
-                d.helps.insert(0, hint)
+                # The reference parser made the finding, so it is loaded already;
+                # imported here, a check of valid files never loads it (lark).
+                from rcsc.front.lark_parse import RULE_END_HELP
+
+                # The foreign spelling is the mistake: a forgotten `;` is not.
+                d.helps = [hint] + [h for h in d.helps if h != RULE_END_HELP]
             continue
         if design is None or d.code not in ("E0100", "E0103", "E0104", "E0105") or d.span is None:
             continue
@@ -119,6 +134,9 @@ def add_hints(diags: Diagnostics, design: Design | None) -> None:
             continue
         if d.code == "E0100" and d.message.startswith("cannot find") and d.helps:
             continue  # the finding already says what the name is (an enum member, a next state, ...)
-        best = closest(name, _candidates(design, d))
+        candidates = _candidates(design, d)
+        if name in candidates:
+            continue  # the name exists (not in `reads`, or another controller's): another name would be a wrong guess
+        best = closest(name, candidates)
         if best is not None:
             d.helps.insert(0, f"did you mean `{best}`?")

@@ -81,7 +81,7 @@ _SUPPRESSION_CODES = frozenset(("W0008",))
 def controller_summary(design, c) -> dict:
     """What the checks of other controllers read of `c`'s plans (JSON values)."""
     from rcsc.checks.guards import commands_sent
-    from rcsc.checks.plans import failure_of
+    from rcsc.checks.plans import failure_of, held_statuses
     from rcsc.semantics import model as m
 
     if m.is_elided(c):
@@ -89,6 +89,7 @@ def controller_summary(design, c) -> dict:
     return _plain({
         "sends": [list(x) for x in commands_sent(design, c)],
         "failure": {verb: failure_of(design, c.name, verb) for verb in c.plans},
+        "holds": {verb: held_statuses(design, c.name, verb) for verb in c.plans},
     })
 
 

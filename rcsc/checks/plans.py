@@ -307,6 +307,34 @@ def failure_of(design: Design, sub: str, verb: str) -> str | None:
     return None
 
 
+def held_statuses(design: Design, sub: str, verb: str) -> list[str] | None:
+    """What `sub` can hold for ever once it runs `verb`: None when its plan for
+    the verb is not `continuous` (it ends in DONE, or ERROR: section 12 of
+    docs/language.md); for a continuous plan, which may never end, the status
+    each rule into a state of its own leaves behind (`EXEC`, or the extra
+    status it reports, which holds until the next rule fires), and `DONE` if a
+    rule ends the plan.  ERROR is `failure_of`'s."""
+    c = design.controllers.get(sub)
+    if c is None:
+        return None
+    if m.is_elided(c):
+        return c.plans.summary["holds"].get(verb)  # type: ignore[attr-defined]
+    plan = c.plans.get(verb)
+    if plan is None or not plan.continuous:
+        return None
+    out: set[str] = set()
+    for r in plan.rules:
+        if r.next.kind == "done":
+            out.add("DONE")
+        elif r.next.kind in ("named", "same"):
+            reports = [j.status for j in r.jobs if isinstance(j, m.Report)]
+            nested = [j.status for j in m.walk_stmts(r.jobs) if isinstance(j, m.Report) and j not in r.jobs]
+            out.update(x for x in reports + nested if x != "ERROR")
+            if not reports:
+                out.add("EXEC")  # no report on some way through the jobs: the rule left EXEC
+    return sorted(out)
+
+
 def _check_error_handling(design: Design, c: m.Controller, plan: m.Plan, states: list[str], reachable: set[str],
                           diags: Diagnostics) -> None:
     """E0505, once per plan and subordinate that can fail, at its first wait

@@ -7,8 +7,10 @@ slot - a command argument for a ranged parameter, an assignment to a ranged
 local, status field or Global Memory variable - stays in the range; and the
 integer arithmetic of conditions and job lists neither wraps nor divides by
 zero.  Each question is asked in the context where the expression runs: the
-rule's own condition true and the earlier rules of its state false.  The
-witness gives the inputs.  Expressions that read a variable which an earlier
+rule's own condition true and the earlier rules of its state false, and,
+for a part of an expression, the conditions under which it is evaluated at
+all (the left side of an `and` true, of an `or` false, an `if` branch's
+condition; `_evaluated_when`).  The witness gives the inputs.  Expressions that read a variable which an earlier
 job of the same list assigns are skipped (the value they see is not an
 input), and so are values computed from the controller's history, which the
 analysis does not follow: an unranged local or status field, and compound
@@ -280,6 +282,29 @@ def _parts(e: m.Expr) -> tuple[Sequence[m.Binary], Sequence[m.Index], Sequence[m
     return arith or [], index or [], records or []
 
 
+def _evaluated_when(root: m.Expr, node: m.Expr) -> list[tuple[m.Expr, bool]] | None:
+    """The conditions (each with the value it must have) under which `node` is
+    evaluated within `root`: `and` evaluates its right side only when its left
+    side is true, `or` only when it is false, `if` one branch (docs/language.md,
+    "Order of evaluation").  None when `node` is not in `root`."""
+    parent: dict[int, m.Expr] = {}
+    for x in m.walk_expr(root):
+        for child in m.expr_children(x):
+            parent[id(child)] = x
+    conds: list[tuple[m.Expr, bool]] = []
+    at = node
+    while at is not root:
+        up = parent.get(id(at))
+        if up is None:
+            return None
+        if isinstance(up, m.Binary) and up.op in ("and", "or") and at is up.right:
+            conds.append((up.left, up.op == "and"))
+        elif isinstance(up, m.IfExpr) and at is not up.cond:
+            conds.append((up.cond, at is up.then))
+        at = up
+    return conds[::-1]
+
+
 class _Plan:
     def __init__(self, design: Design, c: m.Controller, plan: m.Plan, period, diags: Diagnostics, nan: bool) -> None:
         self.design, self.c, self.plan, self.diags = design, c, plan, diags
@@ -331,7 +356,7 @@ class _Plan:
                 if arith:
                     self._expr_checks(r.guard, arith, contexts, r)
                 if index:
-                    self._index_checks(index, contexts, r)
+                    self._index_checks(r.guard, index, contexts, r)
             assigned: set[tuple[str, str]] = set()
             for job in r.jobs:
                 # The job's expressions that read nothing an earlier job of
@@ -342,7 +367,7 @@ class _Plan:
                     if arith:
                         self._expr_checks(e, arith, fired, r)
                     if index:
-                        self._index_checks(index, fired, r)
+                        self._index_checks(e, index, fired, r)
                 if (isinstance(job, m.Assign) and job.target.index is not None and not isinstance(job.target.index, m.Const)
                         and not (assigned and _reads(job.target.index) & assigned)):
                     size = _array_size(self.design, self.c, job.target)
@@ -420,13 +445,27 @@ class _Plan:
             out[inp.name] = value if not isinstance(value, float) or value == value else "NaN"
         return ", ".join(parts), out
 
-    def _index_checks(self, indexes: Sequence[m.Index], contexts: list[list], r: m.Rule) -> None:
-        """W0251 for each index that is not a constant (`_parts`) of an expression."""
+    def _reached(self, root: m.Expr, node: m.Expr):
+        """A z3 condition under which `node` is evaluated within `root` (a
+        condition that cannot be encoded is left out: the question is then
+        asked more widely, never less)."""
+        conds = []
+        for cond, value in _evaluated_when(root, node) or []:
+            term = self._encode(cond)
+            if term is not None and z3.is_bool(term):
+                conds.append(term if value else z3.Not(term))
+        return z3.And(*conds) if conds else z3.BoolVal(True)
+
+    def _index_checks(self, e: m.Expr, indexes: Sequence[m.Index], contexts: list[list], r: m.Rule) -> None:
+        """W0251 for each index that is not a constant (`_parts`) of the expression `e`."""
         for x in indexes:
             size = x.obj.type.size  # type: ignore[attr-defined]
-            self._index_check(x.index, size, x.index.span, [], contexts, r, False)
+            # The witness shows the index's inputs and those of the conditions that let it be read.
+            shown = [cond for cond, _ in _evaluated_when(e, x) or []]
+            self._index_check(x.index, size, x.index.span, shown, contexts, r, False, self._reached(e, x))
 
-    def _index_check(self, index: m.Expr, size: int, span: Span, exprs: list[m.Expr], contexts: list[list], r: m.Rule, writing: bool) -> None:
+    def _index_check(self, index: m.Expr, size: int, span: Span, exprs: list[m.Expr], contexts: list[list], r: m.Rule, writing: bool,
+                     reached=None) -> None:
         """W0251: can `index` be outside 0..size-1 where rule `r` runs?"""
         if (span.start, "index") in self.reported:
             return
@@ -436,7 +475,8 @@ class _Plan:
         i = self._encode(index)
         if i is None or isinstance(i, F):
             return
-        model = self._ask(contexts, z3.Or(i < 0, i >= size), span, f"whether an index in rule `{r.label}` is out of range")
+        bad = z3.Or(i < 0, i >= size)
+        model = self._ask(contexts, bad if reached is None else z3.And(reached, bad), span, f"whether an index in rule `{r.label}` is out of range")
         if model is None:
             return
         self.reported.add((span.start, "index"))
@@ -452,10 +492,14 @@ class _Plan:
 
     def _expr_checks(self, e: m.Expr, arith: Sequence[m.Binary], contexts: list[list], r: m.Rule) -> None:
         """W0525 for each integer operation (`_parts`) of the expression `e`."""
+        # The witness shows the inputs of all of `e`: encoding it first brings
+        # their declared ranges into the question (inputs are made lazily), so
+        # that none is shown outside its range.
+        self._encode(e)
         for x in arith:
             it = _int_type(x.type)
-            if it is None or (x.span.start, x.op) in self.reported:
-                continue
+            if it is None or (x.span.start, x.op) in self.reported or self._history(x):
+                continue  # (an unranged local or status field holds what earlier cycles made of it: not judged)
             a, b = self._encode(x.left), self._encode(x.right)
             if a is None or b is None or isinstance(a, F) or isinstance(b, F):
                 continue
@@ -470,7 +514,7 @@ class _Plan:
                     continue
                 val = a + b if x.op == "+" else a - b if x.op == "-" else a * b
                 bad, what = z3.Or(val > it.max, val < it.min), f"wraps around the range of `{x.type}`"
-            model = self._ask(contexts, bad, x.span, f"whether `{x.op}` in rule `{r.label}` {what}")
+            model = self._ask(contexts, z3.And(self._reached(e, x), bad), x.span, f"whether `{x.op}` in rule `{r.label}` {what}")
             if model is None:
                 continue
             self.reported.add((x.span.start, x.op))
@@ -552,6 +596,7 @@ class _Plan:
             if isinstance(v, (int, float)) and not isinstance(v, bool) and rng.lo <= v <= rng.hi:
                 return
             model, text, data, state = None, f"the value is {format_value(v, t)}", {}, None
+            nan = False
         else:
             value = self._encode(e)
             if value is None or not (isinstance(value, F) or isinstance(t, IntType) or t == DURATION):
@@ -562,11 +607,17 @@ class _Plan:
             text, data = self._witness(model, [e] + ([r.guard] if r.guard is not None else []), r)
             text = "witness: " + text
             state = self.where[self.hit][0]
+            nan = isinstance(value, F) and z3.is_true(model.eval(value.nan, model_completion=True))
         self.reported.add((e.span.start, "range"))
         lo, hi = format_value(rng.lo, t), format_value(rng.hi, t)
         d = self.diags.add("W0524", e.span, f"{what} can be outside its declared range {lo}..{hi}", "out of range")
         d.with_note(text)
-        d.with_help("keep the value in the range (clamp it, or test it in the rule's condition), or widen the range")
+        if nan:
+            # `clamp` (and `min`/`max`) hand a NaN on, so "clamp it" would not help.
+            d.with_note("the value is NaN here: no range holds a NaN, and `clamp`, `min` and `max` pass one on")
+            d.with_help("test the value in the rule's condition (`in_range(x, lo, hi)` is false for NaN), or give the slot another value when it is NaN")
+        else:
+            d.with_help("keep the value in the range (clamp it, or test it in the rule's condition), or widen the range")
         d.data = {"controller": self.c.name, "plan": self.plan.verb, "rules": [r.label], "witness": data, "range": [rng.lo, rng.hi]}
         if state is not None:
             d.data["state"] = state

@@ -133,24 +133,35 @@ def format_text(text: str) -> str:
         if blocks[-1][1] and d == len(blocks) - 1 and _RULE_START.match(stripped) and not leading_close:
             j, rows = _collect_rules(lines, i, len(blocks) - 1, blocks[-1])
             out.extend(rows)
+            # A rule's line may close the plan (`R1: ... | S -> done; }`): its
+            # braces count as any line's do.
+            for ruled in lines[i:j]:
+                depth, pending_plan = _braces(ruled.code_chars(), depth, blocks, pending_plan)
             i = j
             continue
         out.append(indent + stripped if line.ends_in_comment else (indent + stripped).rstrip())
         if depth == 1 and _PLAN_HEAD.match(code):
             pending_plan = True
-        for ch in code:
-            if ch == "{":
-                depth += 1
-                blocks.append([None, pending_plan])
-                pending_plan = False
-            elif ch == "}":
-                depth = max(0, depth - 1)
-                if len(blocks) > 1:
-                    blocks.pop()
+        depth, pending_plan = _braces(code, depth, blocks, pending_plan)
         i += 1
     while out and not out[-1]:
         out.pop()
     return "\n".join(out) + "\n" if out else ""
+
+
+def _braces(code: str, depth: int, blocks: list[list], pending_plan: bool) -> tuple[int, bool]:
+    """The depth after the braces of `code`, opening and closing `blocks` (a `{`
+    after a plan's head opens a plan); returns the depth and `pending_plan`."""
+    for ch in code:
+        if ch == "{":
+            depth += 1
+            blocks.append([None, pending_plan])
+            pending_plan = False
+        elif ch == "}":
+            depth = max(0, depth - 1)
+            if len(blocks) > 1:
+                blocks.pop()
+    return depth, pending_plan
 
 
 def _indent_width(text: str) -> int:
@@ -199,6 +210,8 @@ def _collect_rules(lines: list[_Line], i: int, d: int, block: list) -> tuple[int
         j = min(j, len(lines) - 1)
         items.append(_parse_rule(lines[i:j + 1], d, block))
         i = j + 1
+        if "}" in lines[j].code_chars():
+            break  # the plan ends on this rule's line: what follows is outside it
     # Trailing blank lines belong to what follows: give them back.
     while items and items[-1] == "":
         items.pop()

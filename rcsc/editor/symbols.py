@@ -121,6 +121,14 @@ def build(files: list[ast.File]) -> Index:
                     for v in verb_sets.get(set_name.name, []):
                         members.setdefault(v.name.name, Symbol(v.name.name, "verb", v.name.span, v.span, _signature(v)))
     _attach_docs(files, idx)
+    # An instance without a doc comment of its own shows its type's, as the
+    # model (and so `rcsc doc` and the generated code) gives it.
+    types = {item.name.name: item for tree in files for item in tree.items if isinstance(item, ast.ControllerType)}
+    for tree in files:
+        for item in tree.items:
+            t = types.get(item.type_name.name) if isinstance(item, ast.ControllerInstance) else None
+            if t is not None and item.doc is None and t.doc is not None and item.name.name in idx.controllers:
+                idx.controllers[item.name.name].doc = t.doc.text
     return idx
 
 

@@ -360,6 +360,7 @@ class ControllerType(Node):
     name: Ident
     params: list[TypeParam]
     body: Controller
+    doc: DocComment | None = None
 
 
 @node
@@ -370,6 +371,7 @@ class ControllerInstance(Node):
     simulator: bool
     type_name: Ident
     args: list[Arg]
+    doc: DocComment | None = None
 
 
 @node
@@ -389,6 +391,7 @@ class BlockMember(Node):
     name: Ident
     type: TypeRef
     init: Expr
+    doc: DocComment | None = None
 
 
 @node
@@ -399,6 +402,7 @@ class BlockType(Node):
     params: list[Param]
     members: list[BlockMember]
     steps: list[tuple[Span, list[Stmt]]]
+    doc: DocComment | None = None
 
 
 @node

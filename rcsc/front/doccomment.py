@@ -7,7 +7,9 @@ comments (`COMMENT` in grammar/rcs.lark), so both parsers build the same tree
 and this one pass, run by both, attaches the text to the node it documents:
 controllers, plans, rules, verbs and verb sets, Global Memory variables,
 status fields and locals, record fields, functions, externs, constants,
-enums, records and CPUs.
+enums, records and CPUs; also controller types (the text documents the
+template, and so every instance without a doc comment of its own), controller
+instances, function blocks and their inputs, states and outputs.
 
 The text is the lines without their `///` and one following blank, joined
 with newlines.  It is shown by `rcsc doc` and the language server, and the
@@ -30,7 +32,8 @@ _DOC = re.compile(r"///(?!/)")
 
 # The nodes that can carry a doc comment.
 DOCUMENTED = (ast.Const, ast.Enum, ast.Record, ast.Param, ast.GmVar, ast.Function, ast.Extern, ast.Verb, ast.VerbSet,
-              ast.Rule, ast.Plan, ast.Decl, ast.Controller, ast.Cpu)
+              ast.Rule, ast.Plan, ast.Decl, ast.Controller, ast.Cpu, ast.ControllerType, ast.ControllerInstance, ast.BlockType,
+              ast.BlockMember)
 
 
 def doc_runs(text: str, holes: list[tuple[int, int]] | None = None) -> dict[int, ast.DocComment]:
@@ -100,6 +103,12 @@ def attach(tree: ast.File | None, source: SourceFile, diags: Diagnostics, holes:
 def _children(node) -> list:
     if isinstance(node, ast.Controller):
         return [*node.verbs, *node.status_fields, *node.locals, *node.plans]
+    if isinstance(node, ast.ControllerType):
+        # The template starts where the type does, so it takes the type's doc
+        # comment too and hands it to the instances, which copy the template.
+        return [node.body]
+    if isinstance(node, ast.BlockType):
+        return list(node.members)
     if isinstance(node, ast.Plan):
         return list(node.rules)
     if isinstance(node, ast.VerbSet):

@@ -383,6 +383,8 @@ def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerT
         if decl.name.name in values or decl.name.name in gms:
             diags.add("E0264", decl.name.span, f"`{decl.name.name}` is also a parameter of `{t.name.name}`", "hides the parameter")
     ctrl.param_args = [(p, bound[p.name.name].value) for p in t.params if p.type is not None]
+    if item.doc is not None:  # the instance's own doc comment, else the type's (copied with the template)
+        ctrl.doc = item.doc
     return ctrl
 
 
@@ -482,7 +484,8 @@ def _lower_blocks(ctrl: ast.Controller, btypes: dict[str, ast.BlockType], used: 
         for mb in t.members:
             if mb.name.name in args:
                 diags.add("E0264", cp.copy(mb.name.span), f"`{mb.name.name}` is also a parameter of block `{t.name.name}`", "hides the parameter")
-            decl = ast.Decl(cp.copy(mb.span), ast.Ident(cp.copy(mb.name.span), inst.mangled(mb.name.name)), cp.copy(mb.type), cp.copy(mb.init))
+            decl = ast.Decl(cp.copy(mb.span), ast.Ident(cp.copy(mb.name.span), inst.mangled(mb.name.name)), cp.copy(mb.type), cp.copy(mb.init),
+                            mb.doc)
             (ctrl.locals if mb.kind == "input" else ctrl.status_fields).append(decl)
         for _, body in t.steps[:1]:
             for st in body:

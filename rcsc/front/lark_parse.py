@@ -590,6 +590,10 @@ def parse_with(parser: Lark, builder_class: type, source: SourceFile, diags: Dia
     return None if builder.too_deep else result
 
 
+# The help of a syntax error where a `;` could stand: most often a rule's `;` was forgotten.
+RULE_END_HELP = "a rule ends with `;`: `LABEL: condition | state -> next | jobs;`"
+
+
 def _syntax_error(parser: Lark, source: SourceFile, exc: UnexpectedInput, diags: Diagnostics) -> None:
     text = source.text
     if isinstance(exc, UnexpectedCharacters):
@@ -637,7 +641,7 @@ def _syntax_error(parser: Lark, source: SourceFile, exc: UnexpectedInput, diags:
         return
     # A rule whose `;` is missing: the next line's start is unexpected.
     if "`;`" in expected and tok.type != "$END" and "\n" in text[:start][len(text[:start].rstrip()):] and _in_plan(text, start):
-        diag.with_help("a rule ends with `;`: `LABEL: condition | state -> next | jobs;`")
+        diag.with_help(RULE_END_HELP)
 
 
 _PLAN_HEADER = re.compile(r"\s*plan\b")

@@ -384,7 +384,7 @@ def _fault(design: m.Design, diags: Diagnostics, span: Span, cycle: int, what: s
     if target.name in other:
         diag.with_help(f"`{target.name}` is a {'controller' if what == 'stop' else 'CPU'}: write `{'freeze' if what == 'stop' else 'stop'} {target.name}`")
     else:
-        diag.with_note(f"{noun}s: " + ", ".join(table))
+        diag.with_note(f"{noun}s: " + ", ".join(table)).guess(target.name, table)
     return None
 
 

@@ -583,8 +583,8 @@ class Target:
     # ---- compiling a written build (`rcsc test --target NAME`) -------------------------
 
     def build_commands(self, folder: str) -> list[tuple[list[str], dict[str, str] | None]]:
-        """The commands that compile the files of `files()` once written to `folder`:
-        (argv, extra environment or None), run in `folder` in order."""
+        """The commands that compile the files of `files()` once written to `folder`
+        (an absolute path): (argv, extra environment or None), run in `folder` in order."""
         raise NotImplementedError
 
     def program(self, folder: str) -> str:

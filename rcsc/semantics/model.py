@@ -515,6 +515,26 @@ def walk_expr(e: Expr) -> list[Expr]:
 _LEAVES = frozenset((Const, Ref, InState, Cycle, Age, SubView))
 
 
+def expr_children(x: Expr) -> tuple[Expr, ...]:
+    """The direct sub-expressions of `x`, left to right (the order `walk_expr` visits them)."""
+    t = type(x)
+    if t is Binary:
+        return (x.left, x.right)
+    if t is IfExpr:
+        return (x.cond, x.then, x.else_)
+    if t is Unary:
+        return (x.operand,)
+    if t is Field:
+        return (x.obj,)
+    if t is Call:
+        return tuple(x.args)
+    if t is Index:
+        return (x.obj, x.index)
+    if t is ArrayLit:
+        return tuple(x.items)
+    return ()
+
+
 def walk_stmts(stmts: list[Stmt]):
     """Every statement of a block, nested ones included, in order."""
     for s in stmts:

@@ -575,7 +575,11 @@ class _Sema:
                     "only a new command enters `new`"
                 )
             if nxt.kind == "error" and r.next.code is not None:
+                found = len(self.d.items)
                 code = const_checker.constant(r.next.code, I32, "an error code")
+                for d in self.d.items[found:]:
+                    if d.code == "E0204":  # the idiom of docs/language.md 9.6
+                        d.with_help("`error(CODE)` takes a constant; to pass a code up, copy it (`SUB.error_code`) into a status field in the same rule")
                 nxt.code = int(code.value) if code is not None and isinstance(code.value, int) else 0
             jobs = checker.stmts(r.jobs)
             rules.append(m.Rule(i, r.label.name, r.span, r.label.span, state, guard, r.guard_span, nxt, jobs, doc=_doc(r)))

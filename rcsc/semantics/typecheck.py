@@ -53,6 +53,8 @@ ARITH_OPS = ("+", "-", "*", "/", "%")
 
 
 @dataclass
+
+
 class Globals:
     """Design-wide names, filled in by rcsc.semantics.sema before bodies are checked."""
 
@@ -477,12 +479,23 @@ class Checker:
         if n in self.g.poisoned:
             return m.Const(node.span, ERROR, 0)
         s = self.s
-        if s.const_only and (n in self.g.gm or n in self.g.variables
+        if s.const_only and (n in self.g.gm or n in self.g.variables or n in self.g.controllers or n == "cmd"
                              or (s.controller and (n in s.controller.locals or n in s.controller.status_fields))):
-            # The name is known: what is wrong is reading a variable where a
-            # value must be known before the design runs.
-            what = "a Global Memory variable" if n in self.g.gm else self.g.variables.get(n, "a variable of the controller")
-            self.d.add("E0204", node.span, f"`{n}` is {what}: a constant expression cannot read it", "a variable").with_note(
+            # The name is known: what is wrong is reading a variable (or a
+            # controller's status, or the command) where a value must be known
+            # before the design runs.
+            if n in self.g.gm:
+                what = "a Global Memory variable"
+            elif n in self.g.variables:
+                what = self.g.variables[n]
+            elif s.controller and (n in s.controller.locals or n in s.controller.status_fields):
+                what = "a variable of the controller"
+            elif n == "cmd":
+                what = "the running command"
+            else:
+                what = "a controller, whose status is known only when the design runs"
+            label = "known only at run time" if n in self.g.controllers or n == "cmd" else "a variable"
+            self.d.add("E0204", node.span, f"`{n}` is {what}: a constant expression cannot read it", label).with_note(
                 "constants, initial values, ranges and scenario values are known before the design runs: "
                 "literals, constants, enum members and arithmetic on them")
             return m.Const(node.span, ERROR, 0)
@@ -726,7 +739,11 @@ class Checker:
             diag = self.d.add("E0200", node.op_span, f"mismatched types: `{lt}` {op} `{rt}`", "operands of different types")
             diag.with_label(node.left.span, f"`{lt}`").with_label(node.right.span, f"`{rt}`")
             if lt.is_numeric and rt.is_numeric:
-                diag.with_help("convert one side explicitly, e.g. `f64(x)`")
+                # Name the operands as written, the conversion to f64 (which loses nothing) first.
+                ways = [f"`{_shown(node.left, op, node.right, None, lt)}`", f"`{_shown(node.left, op, node.right, rt, None)}`"]
+                diag.with_help("convert one side explicitly: " + " or ".join(ways[::-1] if isinstance(rt, FloatType) else ways))
+            elif DURATION in (lt, rt) and (lt.is_numeric or rt.is_numeric):
+                diag.with_help("a duration is written with its unit (`5 ms`, `2 s`); `seconds(d)` gives a duration as f64 seconds")
             return m.Const(node.span, ERROR, 0)
         if arith:
             ok = lt.is_numeric or (lt == DURATION and op in ("+", "-"))
@@ -1028,3 +1045,12 @@ class Checker:
         if args is None:
             return None
         return m.Command(node.span, sub, verb.name, args, node.sub.span)
+
+
+def _shown(left: ast.Expr, op: str, right: ast.Expr, left_to: Type | None, right_to: Type | None) -> str:
+    """`left op right` with one side converted (`x > f64(K)`), as a help shows it;
+    `...` for an operand too long to repeat."""
+    def text(e: ast.Expr, to: Type | None) -> str:
+        t = e.span.text if len(e.span.text) <= 30 and "\n" not in e.span.text else "..."
+        return f"{to}({t})" if to is not None else t
+    return f"{text(left, left_to)} {op} {text(right, right_to)}"

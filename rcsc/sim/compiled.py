@@ -71,7 +71,10 @@ def build(design: m.Design, target_name: str, build_root: str) -> Build:
     files = tg.files()
     # The design's name is cut (a folder's name has at most 255 bytes); the
     # digest of the files tells builds apart.
-    folder = Path(build_root) / f"{design.name[:100]}-{target_name}-{_key(target_name, files)}"
+    # The folder is absolute: the build commands run inside it, so a path
+    # relative to where rcsc was started (the default `build/rcsc-test`) would
+    # mean another place to them (cargo's CARGO_TARGET_DIR, for one).
+    folder = Path(build_root).absolute() / f"{design.name[:100]}-{target_name}-{_key(target_name, files)}"
     multi = len(design.cpus) > 1
     program = Path(tg.program(str(folder)))
     done = folder / ".rcsc-built"
