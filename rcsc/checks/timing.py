@@ -49,7 +49,7 @@ def check(design: Design, diags: Diagnostics) -> None:
     # one finding says it all.
     unscheduled_cpu = any(not cpu.schedule for cpu in design.cpus.values())
     for c in design.controllers.values():
-        if c.name not in placed and not unscheduled_cpu:
+        if c.name not in placed and not unscheduled_cpu and c.name not in design.dropped_schedule:
             diags.add("E0603", c.name_span, f"controller `{c.name}` is not in any CPU schedule", "never runs").with_help(
                 f"add `{c.name}` to a `schedule`"
             )

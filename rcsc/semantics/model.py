@@ -438,6 +438,9 @@ class Design(Fields):
     # The root is a module checked on its own (`rcsc check lib.rcs`, a file
     # nobody imports): declarations, not something that runs.
     is_module: bool = False
+    # Controllers scheduled only by a CPU that is defined a second time (an
+    # E0101): they are not also "never scheduled" (E0603).
+    dropped_schedule: set[str] = field(default_factory=set)
     # Filled in by the timing check: GM variables in declaration order, then
     # command and status buffers in controller declaration order.
     crossings: list[Crossing] = field(default_factory=list)

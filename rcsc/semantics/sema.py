@@ -61,6 +61,7 @@ class _Sema:
         self.g.resolve_const = self._resolve_const_lazily
         self.g.resolve_fn = self._fn_body
         self.fn_busy: set[str] = set()
+        self.dropped_schedule: set[str] = set()  # scheduled by a CPU defined a second time
         self.release_plans = False
         self.elided_plans: dict[str, dict] = {}
         self.decls: dict[str, ast.Node] = {}
@@ -91,6 +92,10 @@ class _Sema:
                         again, first = first, again
                     diag = self.d.add("E0101", again.span, f"`{name.name}` is defined more than once", "defined again here")
                     diag.with_label(first.span, "first defined here")
+                    if isinstance(item, ast.Cpu):
+                        # A CPU defined twice (most often a copy not renamed):
+                        # what the dropped one schedules is not "never run".
+                        self.dropped_schedule.update(n.name for lst in item.schedule for n in lst.names)
                     continue
                 self.decls[name.name] = item
 
@@ -682,6 +687,7 @@ def ast_to_model(files: list[LoadedFile], diags: Diagnostics, release_plans: boo
     head = root.tree.name.span if root.tree is not None and root.tree.name is not None else Span(root.source, 0, 0)
     design = m.Design(name, head)
     design.is_module = root.tree is not None and root.tree.kind != "design"
+    design.dropped_schedule = set(s.dropped_schedule)
     design.enums = {k: t for k, t in s.g.types.items() if isinstance(t, EnumType)}
     design.records = {k: t for k, t in s.g.types.items() if isinstance(t, RecordType)}
     design.consts = dict(s.g.consts)
