@@ -62,6 +62,7 @@ class _Sema:
         self.g.resolve_fn = self._fn_body
         self.fn_busy: set[str] = set()
         self.dropped_schedule: set[str] = set()  # scheduled by a CPU defined a second time
+        self.ambiguous_types: set[str] = set()  # records and enums defined twice
         self.release_plans = False
         self.elided_plans: dict[str, dict] = {}
         self.decls: dict[str, ast.Node] = {}
@@ -92,6 +93,11 @@ class _Sema:
                         again, first = first, again
                     diag = self.d.add("E0101", again.span, f"`{name.name}` is defined more than once", "defined again here")
                     diag.with_label(first.span, "first defined here")
+                    if isinstance(item, (ast.Record, ast.Enum)):
+                        # Which of the two a use means is anyone's guess: the
+                        # type reads as unknown, silently, wherever it is used.
+                        self.ambiguous_types.add(name.name)
+                        diag.with_note(f"the uses of `{name.name}` are not checked until one of the two is renamed")
                     if isinstance(item, ast.Cpu):
                         # A CPU defined twice (most often a copy not renamed):
                         # what the dropped one schedules is not "never run".
@@ -122,6 +128,8 @@ class _Sema:
                 self.const_ast[name] = item
         for name in self.record_ast:
             self._record(name)
+        for name in self.ambiguous_types:
+            self.g.types[name] = ERROR
 
     def _record(self, name: str) -> Type:
         if name in self.g.types:

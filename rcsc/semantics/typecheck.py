@@ -476,7 +476,7 @@ class Checker:
         return self._unknown_name(node, n)
 
     def _unknown_name(self, node: ast.Node, n: str) -> m.Expr:
-        if n in self.g.poisoned:
+        if n in self.g.poisoned or isinstance(self.g.types.get(n), ErrorType):  # reported already (E0101: an enum defined twice)
             return m.Const(node.span, ERROR, 0)
         s = self.s
         if s.const_only and (n in self.g.gm or n in self.g.variables or n in self.g.controllers or n == "cmd"
@@ -825,6 +825,10 @@ class Checker:
                 return m.Const(node.span, ERROR, 0)
             return self.fold(m.Call(node.span, t, "builtin", name, args))
         t = self.g.types.get(name)
+        if isinstance(t, ErrorType):  # a record defined twice (E0101): whose fields, nobody knows
+            for a in node.args:
+                self.expr(a.value)
+            return m.Const(node.span, ERROR, 0)
         if isinstance(t, RecordType):
             args = self.match_args(list(t.fields), node.args, node, f"record `{name}`")
             if args is None:
@@ -985,6 +989,8 @@ class Checker:
             return None
         path = []
         for ident in target[1:]:
+            if isinstance(t, ErrorType):
+                return None  # reported where the type went wrong
             if not isinstance(t, RecordType):
                 self.d.add("E0103", ident.span, f"`{t}` has no field `{ident.name}`", "no such field")
                 return None
