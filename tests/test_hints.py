@@ -315,3 +315,14 @@ def test_error_code_of_a_subordinate_is_not_a_constant(tmp_path: Path) -> None:
     assert [d.code for d in found] == ["E0204"], [(d.code, d.message) for d in found]
     assert found[0].message == "`LOW` is a controller, whose status is known only when the design runs: a constant expression cannot read it"
     assert any("copy it (`SUB.error_code`) into a status field" in h for h in found[0].helps)
+
+
+@pytest.mark.parametrize("where", ["period", "budget"])
+def test_a_named_constant_for_a_duration_keyword_says_it_takes_a_literal(tmp_path: Path, where: str) -> None:
+    """`period STALE` or `budget LIMIT`: a syntax error whose help says these
+    take a duration literal (it said only: expected a number)."""
+    header = "controller TOP level 2 budget 1 ms {"
+    changed = "controller TOP level 2 budget 1 ms period STALE {" if where == "period" else "controller TOP level 2 budget LIMIT {"
+    helps = _helps(tmp_path, TYPOS.replace(header, changed))
+    token = "STALE" if where == "period" else "LIMIT"
+    assert helps[("E0001", token)] == [f"`{where}` takes a duration literal such as `100 ms` or `2 us`, not a named constant"], helps

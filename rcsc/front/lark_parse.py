@@ -629,6 +629,12 @@ def _syntax_error(parser: Lark, source: SourceFile, exc: UnexpectedInput, diags:
     diag = diags.add("E0001", Span(source, start, end), f"syntax error: unexpected {found}", "unexpected here")
     if expected:
         diag.with_note("expected " + _join(expected))
+    before = re.search(r"\b(period|budget|heartbeat|overhead)\s*$", text[:start])
+    if before and tok.type != "$END" and str(tok).isidentifier():
+        # `period STALE`: these take a duration literal, read before any
+        # constant is known (the schedule and the budgets are fixed first).
+        diag.with_help(f"`{before.group(1)}` takes a duration literal such as `100 ms` or `2 us`, not a named constant")
+        return
     if tok.type != "$END" and str(tok).isidentifier():
         # A misspelt keyword (`report` for `reports`, `overheed`): the word
         # the grammar expected there.
