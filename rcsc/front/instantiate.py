@@ -227,6 +227,18 @@ class _TypeCopier(_Copier):
             return e
         return None
 
+    def copy(self, x):
+        # `age(p)` of a `gm` parameter: the age of the variable it is bound
+        # to, its whole variable for a field (stamps belong to variables), as
+        # in `reads` and `writes`; the field itself would not be a name.
+        if (isinstance(x, ast.Call) and x.func.name == "age" and len(x.args) == 1 and x.args[0].name is None
+                and isinstance(x.args[0].value, ast.Name) and x.args[0].value.name in self.gms):
+            head = self.gms[x.args[0].value.name][0]
+            new = self.copy_node(x)
+            new.args = [ast.Arg(new.args[0].span, None, ast.Name(head.span, head.name))]
+            return new
+        return super().copy(x)
+
     def assign(self, node):
         head = node.target[0].name
         if head in self.values:
