@@ -369,10 +369,22 @@ def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerT
         if f.name in ("span", "name", "simulator"):
             continue
         setattr(ctrl, f.name, cp.copy(getattr(body, f.name)))
-    # `reads`/`writes` of a `gm` parameter: the bound variable's name.
+    # `reads`/`writes` of a `gm` parameter: the bound variable's name, once:
+    # two parameters bound to two fields of one variable (`x = pos.x, y =
+    # pos.y`) read or write that variable, which is not listed twice.
     for lists in (ctrl.reads, ctrl.writes):
+        bound_here: set[str] = set()
         for nl in lists:
-            nl.names = [gms[i.name][0] if i.name in gms else i for i in nl.names]
+            names = []
+            for i in nl.names:
+                if i.name in gms:
+                    head = gms[i.name][0]
+                    if head.name in bound_here:
+                        continue
+                    bound_here.add(head.name)
+                    i = head
+                names.append(i)
+            nl.names = names
     for decl in ctrl.status_fields + ctrl.locals:
         if decl.name.name in values or decl.name.name in gms:
             diags.add("E0264", decl.name.span, f"`{decl.name.name}` is also a parameter of `{t.name.name}`", "hides the parameter")
