@@ -286,3 +286,32 @@ def test_the_externs_keep_a_journal() -> None:
     assert c_name.endswith("_externs.c")
     assert len(re.findall(r"\)\n\{\n    dt_mix\(\d+\);", c_text)) == len(externs_of(model))
     assert len(re.findall(r"^        self\.mix\(\d+\);", rust_source(model), re.M)) == len(externs_of(model))
+
+
+def test_the_harness_compares_what_expectations_find(tmp_path: Path) -> None:
+    """The harness evaluates the scenario's `expect` lines again on the
+    snapshots rebuilt from the trace: the same findings give nothing, and a
+    simulator finding that differs is a disagreement."""
+    import dataclasses
+
+    from difftest_run import observed_from_trace
+
+    from rcsc.diagnostics import Diagnostics
+    from rcsc.driver import check_path
+    from rcsc.front.scenario import text_to_scenario
+    from rcsc.front.source import SourceFile
+    from rcsc.sim.runner import run_scenario
+    from rcsc.sim.trace import run_to_jsonl
+
+    case = next(c for c in map(case_of, GEN_SEEDS) if "\nexpect " in c.scenario)
+    path = tmp_path / f"{case.name}.rcs"
+    path.write_text(case.design, encoding="utf-8")
+    model = check_path(str(path)).model
+    sc = text_to_scenario(SourceFile("s.scn", case.scenario), model, Diagnostics())
+    run = run_scenario(model, sc)
+    assert run.results
+    trace = run_to_jsonl(model, run).encode("utf-8")
+    assert observed_from_trace(case.seed, model, sc, run, trace) == []
+    run.results[0] = dataclasses.replace(run.results[0], passed=not run.results[0].passed)
+    (finding,) = observed_from_trace(case.seed, model, sc, run, trace)
+    assert finding.kind == "disagree" and "expectations" in finding.where
