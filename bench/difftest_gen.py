@@ -52,6 +52,27 @@ rate (`period`), conditions and statements read `age(...)` of Global Memory
 and of subordinates, and the scenario (counting base ticks) freezes a
 controller or stops a CPU.
 
+Eight more streams of their own (29 November 2026, later), each decided
+once per seed, so that a seed that draws none of them keeps its design and
+scenario byte for byte: ranges `T in lo..hi` (on constants, Global Memory,
+status fields, locals, record fields, verb parameters, value parameters of
+controller types, and the parameters and results of functions and externs;
+every constant, initial value and command argument of the scenario inside
+its range, values assigned at run time and the scenario's inputs not);
+verb sets of the design's own and std.lifecycle's (`verbs NAME`);
+simulators with verbs, commanded by a supervisor or, outside the command
+tree, by the scenario; `gm` parameters of controller types bound to a field
+of a record in Global Memory, `gm` parameters that are read (each instance
+binds its own variable or field) and a controller type's `period`; extern
+calls as statements and as jobs (their results unused, their calls in the
+journal); arguments by name out of order, after positional ones (commands,
+functions, externs, records, blocks, instances: the language evaluates them
+in the order of the parameters); the scenario's `expect` lines (`at`,
+`within`, `always`, `final`, over statuses, states, verbs, status fields
+and Global Memory), which the harness evaluates again on each program's
+trace; and stub plans (a continuous plan with one entry rule into a state
+with no rules).
+
 `hostile=True` draws names that are reserved words or well-known macros of C
 and Rust, names that collide once joined with `_`, and very long names:
 problems of the targets' naming, found behind that option only.
@@ -59,6 +80,7 @@ problems of the targets' naming, found behind that option only.
 
 from __future__ import annotations
 
+import contextlib
 import random
 import re
 from dataclasses import dataclass, field
@@ -67,6 +89,11 @@ INT_TYPES = ("i32", "i64", "u32")
 NUM_TYPES = ("i32", "i64", "u32", "f64")
 SCALARS = ("bool", "i32", "i64", "u32", "f64", "duration")
 HEARTBEAT_MS = 10
+INT_BOUNDS = {"i32": (-2**31, 2**31 - 1), "i64": (-2**63, 2**63 - 1), "u32": (0, 2**32 - 1)}
+# Bounds of f64 and duration ranges (the range stream), besides the values a range must hold.
+FLOAT_BOUNDS = ["-1.7976931348623157e308", "-1e300", "-1000.0", "-1", "-0.5", "0", "0.0", "-0.0", "0.5", "1.0", "30",
+                "1e16", "1e300", "1.7976931348623157e308"]
+DURATION_BOUNDS = ["(-9223372036 s)", "(-1 s)", "0 ms", "1 us", "10 ms", "1 s", "100 s", "9223372036 s"]
 INT_LITERAL = re.compile(r"\(?-?(0x[0-9A-Fa-f_]+|[0-9_]+)\)?")
 
 INT_EDGES = {
@@ -95,6 +122,9 @@ F64_SPECIALS = ["(0.0 / 0.0)", "(1.0 / 0.0)", "(-1.0 / 0.0)", "(-(0.0 / 0.0))"]
 DOC_TEXTS = ["ends with a backslash \\", "closes */ a C comment", "opens /* one", "a trigraph ??/", "an Ada -- comment",
              "a Rust //! doc and #[attr]", "units: µs, °C, ±0.5 — done", "tab\tinside", "`code`, *stars* and %d %s {}",
              "quotes \" and ' and \\n", "}}} {{{ {% raw %}", "ends with a slash /"]
+
+# std.lifecycle's verb sets (`verbs NAME`).
+STD_VERBSETS = {"Lifecycle": [("INIT", []), ("HALT", []), ("ABORT", [])], "Basic": [("INIT", []), ("HALT", [])]}
 
 # std.math functions by result type: (name, parameter types).
 STD_MATH = {
@@ -168,6 +198,8 @@ class Record:
 class Var:
     name: str
     type: str
+    # A declared range `lo..hi` (the range stream): the texts of its bounds.
+    range: tuple[str, str] | None = None
 
 
 @dataclass
@@ -196,6 +228,10 @@ class Ctrl:
     atparams: list[tuple[str, str]] = field(default_factory=list)  # array value parameters
     instances: list[tuple[str, str]] = field(default_factory=list)
     instance_of: "Ctrl | None" = None
+    # The values of the value parameters, one list per instance (for their ranges).
+    inst_values: list[list[str]] = field(default_factory=list)
+    vsets: list[str] = field(default_factory=list)  # `verbs NAME` (the verb set stream)
+    gm_reads: list[tuple[str, str]] = field(default_factory=list)  # `gm` parameters read: (name, type)
 
 
 class Names:
@@ -298,6 +334,141 @@ class DesignGen:
         self.tp_rng = random.Random(seed ^ 0x7A9A)
         self.acc_wrap = features and self.tp_rng.random() < 0.5  # the user block ACC has `w: [u32; 2]`
         self.sub_values: set[str] = set()  # the names of those status values
+        # The shapes below come each from a stream of its own, decided once
+        # per seed: a seed that draws none of them keeps its design byte for
+        # byte (one that draws one may change elsewhere too).
+        self.rg_rng = random.Random(seed ^ 0x4A2E)  # ranges `T in lo..hi`
+        self.use_ranges = features and self.rg_rng.random() < 0.4
+        self.vs_rng = random.Random(seed ^ 0x5E75)  # verb sets, own and std.lifecycle's
+        self.use_verbsets = features and self.vs_rng.random() < 0.3
+        self.sv_rng = random.Random(seed ^ 0x51F7)  # simulators that accept commands
+        self.use_sim_verbs = features and self.sv_rng.random() < 0.5
+        # `gm` parameters bound to record fields, `gm` parameters read, a controller type's `period`.
+        self.tb_rng = random.Random(seed ^ 0x6B1D)
+        self.use_bindings = features and self.tb_rng.random() < 0.6
+        self.es_rng = random.Random(seed ^ 0xE5CA)  # extern calls as statements
+        self.use_ext_stmts = features and self.es_rng.random() < 0.5
+        self.na_rng = random.Random(seed ^ 0xA4A3)  # arguments by name out of order, positional ones first
+        self.use_reorder = features and self.na_rng.random() < 0.5
+        self.ex_rng = random.Random(seed ^ 0xE4EC)  # the scenario's `expect` lines
+        self.use_expects = features and self.ex_rng.random() < 0.5
+        self.stub_rng = random.Random(seed ^ 0x5702)  # stub plans (docs/language.md section 9.5)
+        self.use_stubs = features and self.stub_rng.random() < 0.25
+        self.field_ranges: dict[tuple[str, str], tuple[str, str]] = {}  # (record, field) -> bounds
+        self.param_ranges: dict[tuple[str, str], tuple[str, str]] = {}  # (verb, parameter) -> bounds
+        self.verbsets: dict[str, list[tuple[str, list[tuple[str, str]]]]] = {}  # name -> its verbs
+        self.type_periods: dict[str, int] = {}  # controller type -> its period in ms
+
+    # ---- streams of their own -------------------------------------------------------
+
+    STREAMS = ("rng", "x_rng", "math_rng", "arr_rng", "ext_rng", "blk_rng", "mc_rng", "tp_rng", "ct_rng")
+
+    @contextlib.contextmanager
+    def drawing_from(self, rng: random.Random):
+        """Draw expressions from `rng` alone: every stream the expression
+        drawing reads is replaced, for the time of the block, by one seeded
+        from `rng`, so that what is drawn inside leaves every stream (and
+        the expression budget) where it was."""
+        saved = {a: getattr(self, a) for a in self.STREAMS}
+        budget = self.budget
+        for a in self.STREAMS:
+            setattr(self, a, random.Random(rng.getrandbits(64)))
+        try:
+            yield
+        finally:
+            for a, v in saved.items():
+                setattr(self, a, v)
+            self.budget = budget
+
+    def arglist(self, params: list[str], values: list[str], named: bool) -> str:
+        """Arguments as written.  The reordering stream sometimes gives
+        positional ones by name, and named ones out of order, after some
+        positional ones: the language evaluates them in the order of the
+        parameters, whatever order they are written in."""
+        na = self.na_rng
+        if not named:
+            if not (self.use_reorder and params and na.random() < 0.3):
+                return ", ".join(values)
+        pairs = [f"{p} = {v}" for p, v in zip(params, values)]
+        if self.use_reorder and len(pairs) > 1 and na.random() < 0.7:
+            k = 0 if na.random() < 0.5 else na.randrange(len(pairs))
+            rest = pairs[k:]
+            na.shuffle(rest)
+            return ", ".join(values[:k] + rest)
+        return ", ".join(pairs)
+
+    # ---- ranges ---------------------------------------------------------------------
+
+    def number(self, text: str, t: str):
+        """The value of a literal of type t (an int, a float, nanoseconds), or
+        None for anything else (an expression, NaN, an infinity)."""
+        text = text.strip()
+        while text.startswith("(") and text.endswith(")"):
+            text = text[1:-1].strip()
+        try:
+            if t in INT_TYPES:
+                v = int(text.replace("_", ""), 0)
+                # `-3` of a u32 is a negation that wraps, not a literal.
+                return v if INT_BOUNDS[t][0] <= v <= INT_BOUNDS[t][1] else None
+            if t == "f64":
+                v = float(text.replace("_", ""))
+                return v if v == v and abs(v) != float("inf") else None
+            if t == "duration":
+                from decimal import Decimal
+
+                num, unit = text.split()
+                return int(Decimal(num.replace("_", "")) * {"us": 10**3, "ms": 10**6, "s": 10**9}[unit])
+        except (ValueError, KeyError, ArithmeticError):
+            return None
+        return None
+
+    def draw_range(self, t: str, values: list[str]) -> tuple[str, str] | None:
+        """Bounds `lo..hi` for type t that hold every one of `values` (none
+        when one of them is not a literal); from the range stream."""
+        g = self.rg_rng
+        if t not in NUM_TYPES and t != "duration":
+            return None
+        nums = [self.number(v, t) for v in values]
+        if any(v is None for v in nums):
+            return None
+
+        def paren(text: str) -> str:
+            return f"({text})" if text.startswith("-") and g.random() < 0.5 else text
+
+        if t in INT_TYPES:
+            tlo, thi = INT_BOUNDS[t]
+            lo = min(nums) if nums else max(tlo, g.randint(-100, 100))
+            hi = max(nums) if nums else lo
+            lo = max(tlo, lo - g.choice([0, 0, 1, 3, 100, 70000, 2**40]))
+            hi = min(thi, hi + g.choice([0, 1, 3, 100, 70000, 2**40]))
+            return paren(str(lo)), paren(str(hi))
+        if t == "f64":
+            lo_v = min(nums) if nums else 0.0
+            hi_v = max(nums) if nums else 1.0
+            los = [b for b in FLOAT_BOUNDS if float(b) <= lo_v] + [values[nums.index(lo_v)] if nums else "0.0"]
+            his = [b for b in FLOAT_BOUNDS if float(b) >= hi_v] + [values[nums.index(hi_v)] if nums else "1.0"]
+            return paren(g.choice(los)), paren(g.choice(his))
+        lo_v = min(nums) if nums else 0
+        hi_v = max(nums) if nums else 10**7
+        los = [b for b in DURATION_BOUNDS if self.number(b, t) <= lo_v] + ([values[nums.index(lo_v)]] if nums else [])
+        his = [b for b in DURATION_BOUNDS if self.number(b, t) >= hi_v] + ([values[nums.index(hi_v)]] if nums else [])
+        return g.choice(los), g.choice(his)
+
+    def ranged(self, t: str, values: list[str], p: float = 0.35) -> tuple[str, tuple[str, str] | None]:
+        """A declared type: sometimes (the range stream) with a range that holds `values`."""
+        if not self.use_ranges or self.rg_rng.random() >= p:
+            return t, None
+        bounds = self.draw_range(t, values)
+        return (f"{t} in {bounds[0]}..{bounds[1]}", bounds) if bounds else (t, None)
+
+    def fit(self, text: str, t: str, bounds: tuple[str, str] | None) -> str:
+        """`text` if it lies in `bounds`, else the lower bound (a constant in a ranged slot must)."""
+        if bounds is None:
+            return text
+        v = self.number(text, t)
+        if v is not None and self.number(bounds[0], t) <= v <= self.number(bounds[1], t):
+            return text
+        return bounds[0]
 
     # ---- types and values ------------------------------------------------------------
 
@@ -327,7 +498,8 @@ class DesignGen:
         if t in self.enums:
             return f"{t}.{r.choice(self.enums[t])}"
         rec = self.records[t] if t in self.records else self.arecords[t]
-        return f"{t}(" + ", ".join(f"{f} = {self.literal(ft, r)}" for f, ft in rec.fields) + ")"
+        vals = [self.fit(self.literal(ft, r), ft, self.field_ranges.get((t, f))) for f, ft in rec.fields]
+        return f"{t}(" + self.arglist([f for f, _ in rec.fields], vals, True) + ")"
 
     def const_value(self, t: str) -> str:
         """A constant's value: a literal, or an edge computed at compile time."""
@@ -415,12 +587,13 @@ class DesignGen:
         if self.more and not self.in_fn and t in NUM_TYPES and self.x_rng.random() < 0.12:
             # Two extern calls as the operands of one operator: the order of
             # the calls is the language's (left to right), not the compiler's.
-            exts = [(n, [pt for _, pt in ps]) for n, ps, rt in self.externs if rt == t]
+            exts = [(n, ps) for n, ps, rt in self.externs if rt == t]
             if exts:
                 calls = []
                 for _ in range(2):
                     name, params = self.x_rng.choice(exts)
-                    calls.append(f"{name}(" + ", ".join(self.expr(pt, scope, min(d, 1)) for pt in params) + ")")
+                    vals = [self.expr(pt, scope, min(d, 1)) for _, pt in params]
+                    calls.append(f"{name}(" + self.arglist([p for p, _ in params], vals, False) + ")")
                 ops = ["+", "-", "*"] + (["/"] if t == "f64" else [])
                 return f"({calls[0]} {self.x_rng.choice(ops)} {calls[1]})"
         if t in NUM_TYPES:
@@ -479,24 +652,30 @@ class DesignGen:
                 return call
         if t in self.records and k < 0.6:
             rec = self.records[t]
-            return f"{t}(" + ", ".join(f"{f} = {self.expr(ft, scope, d)}" for f, ft in rec.fields) + ")"
+            vals = [self.expr(ft, scope, d) for _, ft in rec.fields]
+            return f"{t}(" + self.arglist([f for f, _ in rec.fields], vals, True) + ")"
         return self.leaf(t, scope)
 
     def call(self, t: str, scope: list[Var], depth: int) -> str | None:
-        exts = [(n, [pt for _, pt in ps]) for n, ps, rt in self.externs if rt == t]
+        exts = [(n, ps) for n, ps, rt in self.externs if rt == t]
         if exts and not self.in_fn and self.ext_rng.random() < 0.5:
             # The simulator's extern returns the zero value of its type, as the
             # generated stubs of both targets do: the call, its arguments and
             # the conversion of the result are what is compared.
             name, params = self.ext_rng.choice(exts)
-            return f"{name}(" + ", ".join(self.expr(pt, scope, depth) for pt in params) + ")"
-        cands = [(n, [pt for _, pt in ps]) for n, ps, rt in self.fns if rt == t]
+            vals = [self.expr(pt, scope, depth) for _, pt in params]
+            return f"{name}(" + self.arglist([p for p, _ in params], vals, False) + ")"
+        cands = [(n, ps) for n, ps, rt in self.fns if rt == t]
         if self.std_math:
-            cands += [(n, list(ps)) for n, ps in STD_MATH.get(t, [])]
+            # std.math's parameters are given by position only (their names are not listed here).
+            cands += [(n, [("", pt) for pt in ps]) for n, ps in STD_MATH.get(t, [])]
         if not cands:
             return None
         name, params = self.rng.choice(cands)
-        return f"{name}(" + ", ".join(self.expr(pt, scope, depth) for pt in params) + ")"
+        vals = [self.expr(pt, scope, depth) for _, pt in params]
+        if params and not params[0][0]:
+            return f"{name}(" + ", ".join(vals) + ")"
+        return f"{name}(" + self.arglist([p for p, _ in params], vals, False) + ")"
 
     def cond(self, scope: list[Var], depth: int = 2) -> str:
         r = self.rng
@@ -570,12 +749,23 @@ class DesignGen:
 
     def extern_test(self, scope: list[Var]) -> str | None:
         """A call of an extern that returns a bool (the "more" stream), or None."""
-        exts = [(n, [pt for _, pt in ps]) for n, ps, rt in self.externs if rt == "bool"]
+        exts = [(n, ps) for n, ps, rt in self.externs if rt == "bool"]
         if not exts or self.in_fn:
             return None
         name, params = self.x_rng.choice(exts)
         self.budget = 4
-        return f"{name}(" + ", ".join(self.expr(pt, scope, 1) for pt in params) + ")"
+        vals = [self.expr(pt, scope, 1) for _, pt in params]
+        return f"{name}(" + self.arglist([p for p, _ in params], vals, False) + ")"
+
+    def extern_stmt(self, scope: list[Var]) -> str:
+        """A call of an extern whose value is not used, as a statement or a
+        job (the extern statements stream): its journal still counts it."""
+        e = self.es_rng
+        with self.drawing_from(e):
+            name, params, _ = e.choice(self.externs)
+            self.budget = 6
+            vals = [self.expr(pt, scope, 2) for _, pt in params]
+            return f"{name}(" + self.arglist([p for p, _ in params], vals, e.random() < 0.3) + ")"
 
     def lvalues(self, targets: list[Var]) -> list[tuple[str, str]]:
         """Assignable places: variables and their record fields."""
@@ -629,6 +819,8 @@ class DesignGen:
         r = self.rng
         lines = []
         for _ in range(n):
+            if self.use_ext_stmts and self.externs and self.es_rng.random() < 0.2:
+                lines.append(f"{indent}{self.extern_stmt(scope)};")  # besides the statement drawn below
             if self.bcalls and self.blk_rng.random() < 0.35:
                 lines.append(f"{indent}{self.bcall(scope)};")
                 continue
@@ -798,10 +990,8 @@ class DesignGen:
         self.budget = 8
         args = [self.expr(t, scope, 2) for _, t in inputs]
         k = b.random()
-        if k < 0.5:
-            return f"{inst}(" + ", ".join(f"{i} = {e}" for (i, _), e in zip(inputs, args)) + ")"
         if k < 0.85:
-            return f"{inst}({', '.join(args)})"
+            return f"{inst}(" + self.arglist([i for i, _ in inputs], args, k < 0.5) + ")"
         return f"{inst}()"
 
     def declare_arrays(self) -> None:
@@ -899,18 +1089,17 @@ class DesignGen:
         names = [c.name] + [n.fresh("C", upper=True) for _ in range(ct.randint(1, 2))]
         for name in names:
             vals = [self.literal(t, ct) for _, t in c.tparams] + [self.int_array_literal(t) for _, t in c.atparams]
+            c.inst_values.append(vals[:len(c.tparams)])
             outs = []
             for w in c.writes:
                 g = Var(n.fresh("out"), w.type)
                 self.gm_out.append(g)
-                outs.append(g.name)
+                outs.append(self.bind_field(g))
             params = [p for p, _ in c.tparams + c.atparams] + [w.name for w in c.writes]
             values = vals + outs
-            if ct.random() < 0.5:
-                args = ", ".join(values)
-            else:
-                args = ", ".join(f"{p} = {v}" for p, v in zip(params, values))
-            c.instances.append((name, args))
+            # The arguments are written out with the design (`instance_args`):
+            # `gm` parameters read may still be added to them.
+            c.instances.append((name, (list(zip(params, values)), ct.random() >= 0.5)))
             if name != c.name:
                 clone = Ctrl(name, c.level, simulator=c.simulator, verbs=c.verbs, reports=c.reports, status=c.status,
                              locals=c.locals, writes=c.writes, instance_of=c)
@@ -918,6 +1107,55 @@ class DesignGen:
                     parent.subs.append(clone)
                 self.ctrls.append(clone)
         c.own_outs = [g for g in self.gm_out[len(self.gm_out) - len(c.writes) * len(names):]]
+
+    def bind_field(self, g: Var) -> str:
+        """The Global Memory an instance binds a `gm` parameter it writes to:
+        `g`, or (the bindings stream) a field of `g`, which then becomes a
+        record of the field's type and another."""
+        tb = self.tb_rng
+        if not self.use_bindings or tb.random() >= 0.4:
+            return g.name
+        rname, fname = self.names.fresh("RecB"), self.names.fresh("fb")
+        self.records[rname] = Record(rname, [(self.names.fresh("fa"), tb.choice(["i32", "bool", "f64"])), (fname, g.type)]
+                                     if tb.random() < 0.5 else [(fname, g.type), (self.names.fresh("fa"), "u32")])
+        g.type = rname
+        return f"{g.name}.{fname}"
+
+    def read_bindings(self) -> None:
+        """`gm` parameters a controller type reads (the bindings stream), each
+        instance binding its own Global Memory variable or field of one, of
+        one type, not one its own instances write."""
+        tb = self.tb_rng
+        if not self.use_bindings:
+            return
+        for c in self.ctrls:
+            if not c.type_name or tb.random() < 0.3:
+                continue
+            # Not what its instances write, nor what the type reads already (E0101).
+            own = {g.name for g in getattr(c, "own_outs", [])} | {v.name for v in c.reads}
+            sources: dict[str, list[str]] = {}
+            for v in self.env + self.gm_out:
+                if v.name in own:
+                    continue
+                sources.setdefault(v.type, []).append(v.name)
+                for f, ft in self.records[v.type].fields if v.type in self.records else []:
+                    sources.setdefault(ft, []).append(f"{v.name}.{f}")
+            types = sorted(t for t in sources if t in SCALARS or t in self.enums or t in self.records)
+            if not types:
+                continue
+            t = tb.choice(types)
+            fields = sorted(t for t in types if any("." in x for x in sources[t]))
+            if fields and tb.random() < 0.8:  # a type that some field has, so that an instance may bind a field
+                t = tb.choice(fields)
+            pname = self.names.fresh("src")
+            c.gm_reads.append((pname, t))
+            c.reads.append(Var(pname, t))
+            for _, (pairs, _) in c.instances:
+                fields = [x for x in sources[t] if "." in x]
+                pairs.append((pname, tb.choice(fields if fields and tb.random() < 0.6 else sources[t])))
+
+    def instance_args(self, pairs: list[tuple[str, str]], named: bool) -> str:
+        return self.arglist([p for p, _ in pairs], [v for _, v in pairs], named)
 
     def hierarchy_blocks(self) -> None:
         b = self.blk_rng
@@ -941,10 +1179,7 @@ class DesignGen:
                         vals.append(("w", "[" + ", ".join(self.tp_rng.choice(INT_EDGES["u32"] + ["0", "1", "2", "3"]) for _ in range(2)) + "]"))
                     inputs = [("x", "f64"), ("i", "i32")]
                     outputs = [("y", "f64")]
-                if b.random() < 0.5:
-                    args = ", ".join(v for _, v in vals)
-                else:
-                    args = ", ".join(f"{p} = {v}" for p, v in vals)
+                args = self.arglist([p for p, _ in vals], [v for _, v in vals], b.random() >= 0.5)
                 c.blocks.append((n.fresh("fb"), kind, args, inputs, outputs))
 
     def user_block(self, name: str) -> list[str]:
@@ -1039,6 +1274,11 @@ class DesignGen:
             self.env.append(Var(n.fresh("in"), r.choice(NUM_TYPES)))
         if self.use_arrays:
             self.declare_arrays()
+        for rec in self.records.values():  # ranges on record fields: every value of the record keeps them
+            for f, ft in rec.fields:
+                _, bounds = self.ranged(ft, [], 0.3)
+                if bounds:
+                    self.field_ranges[(rec.name, f)] = bounds
 
     def hierarchy(self) -> None:
         r = self.rng
@@ -1077,10 +1317,72 @@ class DesignGen:
         if self.use_arrays:
             self.hierarchy_arrays()
         self.hierarchy_blocks()
+        self.read_bindings()
+        self.sim_verbs()
+        self.verb_sets()
         for c in self.ctrls:
             if c.instance_of:
                 src = c.instance_of
                 c.reads, c.astatus = src.reads, src.astatus
+
+    def stream_type(self, rng: random.Random) -> str:
+        return rng.choice(list(SCALARS) * 3 + list(self.enums) + list(self.records))
+
+    def sim_verbs(self) -> None:
+        """Simulators that accept commands (the simulator verbs stream): from a
+        controller that takes one as a subordinate, or from the scenario when
+        it stands outside the command tree."""
+        s = self.sv_rng
+        n = self.names
+        sims = [c for c in self.ctrls if c.simulator and not c.instance_of]
+        if not self.use_sim_verbs or not sims:
+            return
+        for c in sims:
+            for _ in range(s.randint(1, 2)):
+                c.verbs.append((n.fresh("V", upper=True), [(n.fresh("p"), self.stream_type(s)) for _ in range(s.randint(0, 2))]))
+            if s.random() < 0.3:
+                c.reports.append(n.fresh("REP", upper=True))
+        # Not a controller type: each of its instances would command the same subordinate (E0300).
+        supervisors = [c for c in self.ctrls if not c.simulator and not c.type_name and not c.instance_of]
+        for c in self.ctrls:  # the instances of a simulator type too, each on its own
+            if c.simulator and s.random() < 0.5:
+                s.choice(supervisors).subs.append(c)
+
+    def verb_sets(self) -> None:
+        """A verb set of the design's own (the verb sets stream) that one to
+        three controllers bring in with `verbs NAME`, and std.lifecycle's."""
+        v = self.vs_rng
+        n = self.names
+        if not self.use_verbsets:
+            return
+        cands = [c for c in self.ctrls if not c.instance_of]
+        name = n.fresh("Vs")
+        verbs = [(n.fresh("V", upper=True), [(n.fresh("p"), self.stream_type(v)) for _ in range(v.randint(0, 2))])
+                 for _ in range(v.randint(1, 2))]
+        self.verbsets[name] = verbs
+        for c in v.sample(cands, min(len(cands), v.randint(1, 3))):
+            c.vsets.append(name)
+            c.verbs.extend(verbs)
+        if v.random() < 0.4:
+            std = v.choice(sorted(STD_VERBSETS))
+            for c in v.sample(cands, min(len(cands), v.randint(1, 2))):
+                c.vsets.append(std)
+                c.verbs.extend(STD_VERBSETS[std])
+
+    def type_period(self) -> None:
+        """A controller type's `period` (the bindings stream): a whole number
+        of the heartbeats of every CPU its instances run on (E0607)."""
+        import math
+
+        tb = self.tb_rng
+        for c in self.ctrls:
+            if not c.type_name or tb.random() >= 0.5:
+                continue
+            if self.use_rates:
+                beats = [hb for _, hb, here in self.cpus for x in here if x is c or x.instance_of is c]
+                self.type_periods[c.type_name] = math.lcm(*beats) * tb.choice([1, 2, 3])
+            elif not self.more:  # one CPU of HEARTBEAT_MS (the "more" stream may draw another heartbeat)
+                self.type_periods[c.type_name] = HEARTBEAT_MS * tb.choice([2, 3, 5])
 
     def function(self, name: str, params: list[tuple[str, str]], ret: str, index: int) -> str:
         # A function calls only functions declared before it: no recursion.
@@ -1091,7 +1393,23 @@ class DesignGen:
         body = self.expr(ret, [Var(p, t) for p, t in params], 3)
         self.in_fn = False
         self.fns = saved
-        return f"fn {name}(" + ", ".join(f"{p}: {t}" for p, t in params) + f") -> {ret} =\n    {body}"
+        # Ranges on the parameters and the result document them (the checker
+        # assumes them, no target checks them at run time).
+        return (f"fn {name}(" + ", ".join(f"{p}: {self.ranged(t, [], 0.25)[0]}" for p, t in params)
+                + f") -> {self.ranged(ret, [], 0.25)[0]} =\n    {body}")
+
+    def bounded(self, t: str, bounds: tuple[str, str] | None) -> str:
+        return f"{t} in {bounds[0]}..{bounds[1]}" if bounds else t
+
+    def verb_line(self, verb: str, params: list[tuple[str, str]]) -> str:
+        """`verb V(p: T, ...)`, a parameter sometimes with a range (kept for the scenario's commands)."""
+        texts = []
+        for p, t in params:
+            text, bounds = self.ranged(t, [])
+            if bounds:
+                self.param_ranges[(verb, p)] = bounds
+            texts.append(f"{p}: {text}")
+        return f"verb {verb}" + (f"({', '.join(texts)})" if texts else "")
 
     # ---- plans ----------------------------------------------------------------------
 
@@ -1109,12 +1427,13 @@ class DesignGen:
                 verb, params = r.choice(s.verbs)
                 self.budget = 8
                 args = [self.aval(t, scope) if t in self.arrays else self.expr(t, scope, 2) for _, t in params]
-                if params and r.random() < 0.5:
-                    args = [f"{p} = {a}" for (p, _), a in zip(params, args)]
-                out.append(f"{s.name}.{verb}({', '.join(args)})")
+                named = bool(params) and r.random() < 0.5
+                out.append(f"{s.name}.{verb}({self.arglist([p for p, _ in params], args, named)})")
         if c.reports and r.random() < 0.4:
             out.append(f"report {r.choice(c.reports)}")
         r.shuffle(out)
+        if self.use_ext_stmts and self.externs and self.es_rng.random() < 0.3:
+            out.insert(self.es_rng.randint(0, len(out)), self.extern_stmt(scope))
         return ", ".join(out)
 
     def plan(self, c: Ctrl, verb: str, params: list[tuple[str, str]], scope: list[Var], targets: list[Var]) -> list[str]:
@@ -1179,6 +1498,11 @@ class DesignGen:
             else:
                 rule(f"in_state >= {r.choice([20, 30, 50, 100])} ms", st, end())
         self.actx = saved_actx
+        if self.use_stubs and self.stub_rng.random() < 0.25:
+            # A stub plan (docs/language.md section 9.5) in place of the one
+            # drawn, whose draws the rest of the seed keeps: it accepts the
+            # verb and stays executing until the next command.
+            return [f"    plan {verb} continuous {{", f"        R0: true | new -> {self.stub_rng.choice(['EXECUTING', 'S0'])};", "    }"]
         return [f"    plan {verb}{mods} {{", *rules, "    }"]
 
     # ---- the design -----------------------------------------------------------------
@@ -1189,23 +1513,28 @@ class DesignGen:
         self.hierarchy()
         if self.use_rates:
             self.placement()
+        if self.use_bindings:
+            self.type_period()
         out = [f"// generated by bench/difftest_gen.py, seed {self.seed}", f"design {name}", ""]
         if self.std_math:
             out += ["import std.math", ""]
         if any(k in STD_BLOCKS for c in self.ctrls for _, k, _, _, _ in c.blocks):
             out += ["import std.blocks", ""]
+        if any(v in STD_VERBSETS for c in self.ctrls for v in c.vsets):
+            out += ["import std.lifecycle", ""]
         for e, members in self.enums.items():
             out.append(f"enum {e} {{ {', '.join(members)} }}")
         a = self.arr_rng
         for rec in self.records.values():
-            out.append(f"record {rec.name} {{ " + ", ".join(f"{f}: {t}" for f, t in rec.fields) + " }")
+            out.append(f"record {rec.name} {{ " + ", ".join(f"{f}: {self.bounded(t, self.field_ranges.get((rec.name, f)))}" for f, t in rec.fields) + " }")
         for lname, size in self.len_consts:
             out.append(f"const {lname}: i32 = {size}")
         for rec in self.arecords.values():
             out.append(f"record {rec.name} {{ " + ", ".join(f"{f}: {t}" for f, t in rec.fields) + " }")
         for i, cst in enumerate(self.consts):
             out += self.doc()
-            out.append(f"const {cst.name}: {cst.type} = {self.derived_const(cst.type, self.consts[:i])}")
+            value = self.derived_const(cst.type, self.consts[:i])
+            out.append(f"const {cst.name}: {self.ranged(cst.type, [value])[0]} = {value}")
         for cst in self.aconsts:
             out.append(f"const {cst.name}: {cst.type} = {self.literal(cst.type, a)}")
         for i, (fname, params, ret) in enumerate(self.fns):
@@ -1216,16 +1545,23 @@ class DesignGen:
         for fname, at, elem, body in self.arfns:
             out.append(f"fn {fname}(xs: {at}, k: {elem}) -> {at} =\n    {body}")
         for ename, params, ret in self.externs:
-            out.append(f"extern fn {ename}(" + ", ".join(f"{p}: {t}" for p, t in params) + f") -> {ret} budget 1 us")
+            out.append(f"extern fn {ename}(" + ", ".join(f"{p}: {self.ranged(t, [], 0.2)[0]}" for p, t in params)
+                       + f") -> {self.ranged(ret, [], 0.2)[0]} budget 1 us")
+        for vsname, verbs in self.verbsets.items():
+            out.append(f"verbset {vsname} {{")
+            out += ["    " + self.verb_line(verb, params) for verb, params in verbs]
+            out.append("}")
         for bname in self.user_blocks:
             out += self.user_block(bname)
         for v in self.env:
             out += self.doc()
-            out.append(f"gm {v.name}: {v.type} = {self.literal(v.type)} from env")
+            init = self.literal(v.type)
+            out.append(f"gm {v.name}: {self.ranged(v.type, [init])[0]} = {init} from env")
         for v in self.aenv:
             out.append(f"gm {v.name}: {v.type} = {self.literal(v.type, a)} from env")
         for v in self.gm_out:
-            out.append(f"gm {v.name}: {v.type} = {self.literal(v.type)}")
+            init = self.literal(v.type)
+            out.append(f"gm {v.name}: {self.ranged(v.type, [init])[0]} = {init}")
         for v in self.agm:
             out.append(f"gm {v.name}: {v.type} = {self.literal(v.type, a)}")
         out.append("")
@@ -1234,8 +1570,11 @@ class DesignGen:
                 continue
             kind = "simulator" if c.simulator else "controller"
             if c.type_name:
-                tps = [f"{p}: {t}" for p, t in c.tparams + c.atparams] + [f"{w.name}: gm" for w in c.writes]
-                out.append(f"{kind} type {c.type_name}({', '.join(tps)}) level {c.level} budget 100 us {{")
+                tps = [f"{p}: {self.ranged(t, [vals[i] for vals in c.inst_values])[0]}" for i, (p, t) in enumerate(c.tparams)]
+                tps += [f"{p}: {t}" for p, t in c.atparams] + [f"{w.name}: gm" for w in c.writes]
+                tps += [f"{p}: gm" for p, _ in c.gm_reads]
+                period = f" period {self.type_periods[c.type_name]} ms" if c.type_name in self.type_periods else ""
+                out.append(f"{kind} type {c.type_name}({', '.join(tps)}) level {c.level} budget 100 us{period} {{")
             else:
                 period = f" period {self.periods[c.name]} ms" if c.name in self.periods else ""
                 out += self.doc()
@@ -1246,14 +1585,19 @@ class DesignGen:
                 out.append(f"    reads {', '.join(v.name for v in c.reads + c.areads)}")
             if c.writes or c.awrites:
                 out.append(f"    writes {', '.join(v.name for v in c.writes + c.awrites)}")
+            from_sets = {verb for vs in c.vsets for verb, _ in self.verbsets.get(vs, STD_VERBSETS.get(vs, []))}
+            out += [f"    verbs {vs}" for vs in c.vsets]
             for verb, params in c.verbs:
-                out.append(f"    verb {verb}" + (f"({', '.join(f'{p}: {t}' for p, t in params)})" if params else ""))
+                if verb not in from_sets:
+                    out.append("    " + self.verb_line(verb, params))
             if c.reports:
                 out.append(f"    reports {', '.join(c.reports)}")
             for v in c.status:
-                out.append(f"    status {v.name}: {v.type} = {self.literal(v.type)}")
+                init = self.literal(v.type)
+                out.append(f"    status {v.name}: {self.ranged(v.type, [init])[0]} = {init}")
             for v in c.locals:
-                out.append(f"    local {v.name}: {v.type} = {self.literal(v.type)}")
+                init = self.literal(v.type)
+                out.append(f"    local {v.name}: {self.ranged(v.type, [init])[0]} = {init}")
             for v in c.astatus:
                 out.append(f"    status {v.name}: {v.type} = {self.literal(v.type, a)}")
             for v in c.alocals + c.arecs:
@@ -1294,8 +1638,8 @@ class DesignGen:
                 out += self.plan(c, verb, params, scope, targets)
             out.append("}")
             self.actx, self.atargets, self.aidx, self.bcalls = None, [], [], []
-            for iname, iargs in c.instances:
-                out.append(f"{kind} {iname}: {c.type_name}({iargs})")
+            for iname, (pairs, named) in c.instances:
+                out.append(f"{kind} {iname}: {c.type_name}({self.instance_args(pairs, named)})")
             out.append("")
         order = list(self.ctrls)
         if r.random() < 0.7:
@@ -1324,9 +1668,10 @@ class DesignGen:
         for _ in range(r.randint(1, 6)):
             verb, params = r.choice(root.verbs)
             args = [self.array_literal(t, self.arr_rng, scenario=True) if t in self.arrays else self.literal(t) for _, t in params]
-            if params and r.random() < 0.5:
-                args = [f"{p} = {a}" for (p, _), a in zip(params, args)]
-            events.append((r.randint(1, cycles), f"{root.name}.{verb}({', '.join(args)})"))
+            # A command's argument must lie in its parameter's range (E0206).
+            args = [self.fit(a, t, self.param_ranges.get((verb, p))) for (p, t), a in zip(params, args)]
+            named = bool(params) and r.random() < 0.5
+            events.append((r.randint(1, cycles), f"{root.name}.{verb}({self.arglist([p for p, _ in params], args, named)})"))
         for _ in range(r.randint(0, 10)):
             v = r.choice(self.env)
             cand = [c.name for c in self.consts if c.type == v.type]
@@ -1338,9 +1683,65 @@ class DesignGen:
                 events.append((a.randint(1, cycles), f"{v.name} = {self.array_literal(v.type, a, scenario=True)}"))
         if self.use_rates:
             events += self.faults(cycles)
+        events += self.sim_commands(cycles)
         events.sort(key=lambda e: e[0])
         lines += [f"at {t}: {text}" for t, text in events]
+        if self.use_expects:
+            lines += self.expects(cycles)
         return "\n".join(lines) + "\n"
+
+    def sim_commands(self, cycles: int) -> list[tuple[int, str]]:
+        """Commands to the simulators with verbs outside the command tree (the simulator verbs stream)."""
+        s = self.sv_rng
+        subs = {id(x) for c in self.ctrls for x in c.subs}
+        out = []
+        for c in self.ctrls:
+            if not c.simulator or not c.verbs or id(c) in subs:
+                continue
+            for _ in range(s.randint(0, 3)):
+                verb, params = s.choice(c.verbs)
+                args = [self.fit(self.literal(t, s), t, self.param_ranges.get((verb, p))) for p, t in params]
+                out.append((s.randint(1, cycles), f"{c.name}.{verb}({self.arglist([p for p, _ in params], args, s.random() < 0.5)})"))
+        return out
+
+    def expects(self, cycles: int) -> list[str]:
+        """`expect` lines (the expectations stream): the statuses, states,
+        verbs and rules of controllers, their status fields and Global Memory
+        in conditions drawn like the design's.  Whether they hold does not
+        matter: the harness compares what they find in the simulator with
+        what they find in each program's trace."""
+        x = self.ex_rng
+        scope = [Var(v.name, v.type) for v in self.env + self.gm_out]
+        for c in self.ctrls:
+            scope += [Var(f"{c.name}.{v.name}", v.type) for v in c.status]
+            scope += [Var(f"{c.name}.error_code", "i32"), Var(f"{c.name}.echo", "i32"), Var(f"{c.name}.done", "bool")]
+        out = []
+        for _ in range(x.randint(1, 5)):
+            c = x.choice(self.ctrls)
+            k = x.random()
+            if k < 0.15:
+                cond = f"{c.name}.status == {x.choice(['DONE', 'EXEC', 'ERROR', 'UNINITIALIZED'] + c.reports)}"
+            elif k < 0.25 and c.verbs:
+                cond = f"{c.name}.verb {x.choice(['==', '!='])} {x.choice(c.verbs)[0]}"
+            elif k < 0.35:
+                cond = f"{c.name}.state {x.choice(['==', '!='])} {x.choice(['new', 'done', 'error'])}"
+            elif k < 0.45:
+                cond = f"{x.choice(['', 'not '])}{c.name}.{x.choice(['done', 'error', 'executing'] + c.reports)}"
+            else:
+                with self.drawing_from(x):
+                    self.in_fn = True  # no extern call in an expectation (E0211)
+                    self.budget = 8
+                    cond = self.cond(scope, 2)
+                    self.in_fn = False
+            lo = x.randint(1, cycles)
+            when = x.choice(["at", "within", "always", "final"])
+            if when == "at":
+                out.append(f"expect at {lo}: {cond}")
+            elif when == "within":
+                out.append(f"expect within {lo}..{x.randint(lo, cycles)}: {cond}")
+            else:
+                out.append(f"expect {when}: {cond}")
+        return out
 
 
 def draw(seed: int, attempt: int, hostile: bool = False, features: bool = True) -> Case:
@@ -1355,22 +1756,27 @@ def draw(seed: int, attempt: int, hostile: bool = False, features: bool = True) 
 def generate(seed: int, hostile: bool = False, max_attempts: int = 50, features: bool = True) -> Case:
     """The first draw of `seed` whose design checks without errors and whose scenario loads.
 
-    Random conditions often hide a later rule behind an earlier one (E0506);
-    such rules are deleted and the design checked again, a few times, before
-    the next draw is taken.
+    Random conditions often hide a later rule behind an earlier one (E0506)
+    or are never true (E0513); such rules, and then the rules of states that
+    their deletion left unreachable (E0502), are deleted and the design
+    checked again, a few times, before the next draw is taken.
     """
     for attempt in range(max_attempts):
         case = draw(seed, attempt, hostile, features)
-        for _ in range(4):
+        for _ in range(8):
             errors, dead = check_case(case)
             if not errors:
                 return case
-            if not dead or len(dead) != len(errors):
+            # Only dead rules: delete them (a controller type's is reported once per instance, at one line).
+            if not dead or any(not e.startswith(tuple(f"{c}:" for c in DEAD_CODES)) for e in errors):
                 break
             lines = case.design.split("\n")
             case.design = "\n".join(x for i, x in enumerate(lines, 1) if i not in dead)
     raise RuntimeError(f"seed {seed}: no valid design in {max_attempts} draws")
 
+
+# The findings of rules that never fire, which `generate` deletes (at the line of each finding).
+DEAD_CODES = ("E0506", "E0513", "E0502")
 
 _SOLVER_CACHE: list[str] = []
 
@@ -1409,7 +1815,9 @@ def check_case(case: Case) -> tuple[list[str], set[int]]:
         path.write_text(case.design, encoding="utf-8")
         result = check_path(str(path), cache_dir=solver_cache())
         errors = [f"{d.code}: {d.message}" for d in result.diags.errors]
-        dead = {d.span.line for d in result.diags.errors if d.code in ("E0506", "E0513") and d.span is not None}
+        # Rules that never fire: hidden (E0506), never true (E0513), or in a
+        # state that the deletion of such rules left unreachable (E0502).
+        dead = {d.span.line for d in result.diags.errors if d.code in DEAD_CODES and d.span is not None}
         if errors or result.model is None:
             return errors or ["no model"], dead
         diags = Diagnostics()

@@ -156,6 +156,19 @@ def observed_from_trace(seed: int, model, sc, run, trace: bytes) -> list[Finding
     if len(run.snapshots) != len(rebuilt):
         return [Finding(seed, "disagree", "rcsc test --target (what expectations see)",
                         f"{len(run.snapshots)} ticks observed, {len(rebuilt)} rebuilt")]
+    # The scenario's `expect` lines: each must find on the rebuilt snapshots
+    # what it found in the simulator (held or not, the cycle, the values read).
+    from rcsc.sim.runner import evaluate_expectation
+
+    for want in run.results:
+        try:
+            got = evaluate_expectation(model, want.expect, rebuilt)
+        except Exception as exc:
+            return [Finding(seed, "crash", "rcsc test --target (expectations)", f"{type(exc).__name__}: {exc}")]
+        if (want.passed, want.cycle, want.values) != (got.passed, got.cycle, got.values):
+            return [Finding(seed, "disagree", "rcsc test --target (expectations)",
+                            f"expect {want.expect.text}: sim {want.passed} at {want.cycle} {want.values}, "
+                            f"from the trace {got.passed} at {got.cycle} {got.values}")]
     return []
 
 

@@ -111,6 +111,8 @@ def _examples() -> list[tuple[Path, Path]]:
     pairs.append((ROOT / "tests/blocks/blocks.rcs", ROOT / "tests/blocks/blocks.scn"))
     # Array arguments of types and blocks written as literals; negative zeros.
     pairs.append((ROOT / "tests/params/array_params.rcs", ROOT / "tests/params/array_params.scn"))
+    # `gm` parameters bound to record fields, written and read, and `age(...)` of one.
+    pairs.append((ROOT / "tests/bindings/bindings.rcs", ROOT / "tests/bindings/bindings.scn"))
     return pairs
 
 

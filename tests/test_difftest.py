@@ -135,6 +135,59 @@ def test_generator_covers_the_language() -> None:
             assert len(re.findall(rf"^controller \w+: {t}\(", design, re.M)) >= 2, design
 
 
+def test_generator_draws_the_newer_shapes() -> None:
+    """Each shape of the eight newer streams is drawn by some seed of a small range."""
+    text = "\n".join(case_of(s).design + "\n" + case_of(s).scenario for s in GEN_SEEDS)
+    bound = r"(\([^()]*\)|[-\w.+]+( (us|ms|s))?)"
+    wanted = {
+        # ranges (docs/language.md section 4)
+        "ranged constant": rf"^const K\d+: \w+ in {bound}\.\.{bound} = ",
+        "ranged Global Memory": rf"^gm \w+: \w+ in {bound}\.\.{bound} = ",
+        "ranged status or local": rf"^    (status|local) \w+: \w+ in {bound}\.\.", "ranged record field": rf"^record \w+ \{{.*: \w+ in {bound}\.\.",
+        "ranged verb parameter": r"^\s+verb V\d+\(.*: \w+ in ", "ranged value parameter": r"^(controller|simulator) type Ty\d+\(.*: \w+ in ",
+        "ranged function parameter or result": r"^(extern )?fn \w+\(.*(: \w+ in |-> \w+ in )",
+        "ranged f64": r": f64 in ", "ranged duration": r": duration in ", "ranged u32": r": u32 in ",
+        # verb sets, simulators with verbs
+        "verb set": r"^verbset Vs\d+ \{\n    verb V\d+", "verbs of a set": r"^    verbs Vs\d+$",
+        "simulator with a verb": r"^simulator [^{\n]*\{\n(    [^\n]*\n)*    verb V\d+",
+        "simulator commanded by the scenario": r"^at \d+: SIM\d+\.V\d+\(",
+        "simulator commanded by a supervisor": r"\bSIM\d+\.V\d+\(.*[;,]$",
+        # controller types: bindings and period
+        "gm parameter bound to a record field": r"^controller \w+: Ty\d+\(.*= out\d+\.fb\d+",
+        "gm parameter read": r"^(controller|simulator) type Ty\d+\(.*\bsrc\d+: gm",
+        "period of a controller type": r"^controller type .* period \d+ ms \{$",
+        # extern calls as statements and jobs, arguments out of order
+        "extern call statement": r"^\s+ext\d+_\d+\(.*\);$", "extern call job": r"[|,] ext\d+_\d+\([^|]*\)[,;]",
+        "positional then named": r"\w\([^=()]+, \w+ = [^,]+, \w+ = ",
+        "named out of order": r"\bC\d+\.V\d+\(p(\d+) = [^,]+, p(?!\1)\d+ = ",
+        # the scenario's expectations, stub plans
+        "expect at": r"^expect at \d+: ", "expect within": r"^expect within \d+\.\.\d+: ",
+        "expect always": r"^expect always: ", "expect final": r"^expect final: ",
+        "expect on a state or a verb": r"^expect .*\.(state|verb) (==|!=) ", "expect on a status field": r"^expect .*\bC\d+\.st\d+\b",
+        "stub plan": r"^    plan \w+ continuous \{\n        R0: true \| new -> (EXECUTING|S0);\n    \}",
+    }
+    missing = [k for k, pat in wanted.items() if not re.search(pat, text, re.M)]
+    assert missing == []
+    # Rarer: an instance binds a `gm` parameter it reads to a field of a record
+    # (the record must be in Global Memory and written by another controller).
+    assert any(re.search(r"\bsrc\d+ = \w+\.\w+", case_of(s).design) for s in range(0, 40))
+
+
+def test_expect_lines_come_from_a_stream_of_their_own() -> None:
+    """A seed's design does not depend on whether it draws `expect` lines,
+    and its scenario is the same without them."""
+    from difftest_gen import DesignGen
+
+    for seed in (5000, 7000, 8000):
+        with_, without = DesignGen(seed), DesignGen(seed)
+        without.use_expects = False
+        assert with_.use_expects, seed
+        assert with_.design("d") == without.design("d")
+        sc = with_.scenario()
+        assert "\nexpect " in sc
+        assert "".join(x for x in sc.splitlines(True) if not x.startswith("expect ")) == without.scenario()
+
+
 def test_hostile_names_are_hostile() -> None:
     text = "\n".join(case_of(s, True).design for s in range(10))
     assert re.search(r"\b(int|static|match|type|NULL|main|self|loop)\b", text)
@@ -233,3 +286,32 @@ def test_the_externs_keep_a_journal() -> None:
     assert c_name.endswith("_externs.c")
     assert len(re.findall(r"\)\n\{\n    dt_mix\(\d+\);", c_text)) == len(externs_of(model))
     assert len(re.findall(r"^        self\.mix\(\d+\);", rust_source(model), re.M)) == len(externs_of(model))
+
+
+def test_the_harness_compares_what_expectations_find(tmp_path: Path) -> None:
+    """The harness evaluates the scenario's `expect` lines again on the
+    snapshots rebuilt from the trace: the same findings give nothing, and a
+    simulator finding that differs is a disagreement."""
+    import dataclasses
+
+    from difftest_run import observed_from_trace
+
+    from rcsc.diagnostics import Diagnostics
+    from rcsc.driver import check_path
+    from rcsc.front.scenario import text_to_scenario
+    from rcsc.front.source import SourceFile
+    from rcsc.sim.runner import run_scenario
+    from rcsc.sim.trace import run_to_jsonl
+
+    case = next(c for c in map(case_of, GEN_SEEDS) if "\nexpect " in c.scenario)
+    path = tmp_path / f"{case.name}.rcs"
+    path.write_text(case.design, encoding="utf-8")
+    model = check_path(str(path)).model
+    sc = text_to_scenario(SourceFile("s.scn", case.scenario), model, Diagnostics())
+    run = run_scenario(model, sc)
+    assert run.results
+    trace = run_to_jsonl(model, run).encode("utf-8")
+    assert observed_from_trace(case.seed, model, sc, run, trace) == []
+    run.results[0] = dataclasses.replace(run.results[0], passed=not run.results[0].passed)
+    (finding,) = observed_from_trace(case.seed, model, sc, run, trace)
+    assert finding.kind == "disagree" and "expectations" in finding.where

@@ -619,3 +619,32 @@ def test_witness_of_an_array_element_is_named_and_replays(tmp_path: Path) -> Non
     witness = found[0].data["witness"]
     assert "ps[0].b" in witness and "ps[1].b" in witness, witness
     replay(result.model, found[0])
+
+
+def test_an_infinite_constant_is_one_value_in_every_rule(tmp_path: Path) -> None:
+    """`y >= -1.0 / 0.0` in one rule of `new` and `not (y >= -1.0 / 0.0)` in
+    the next: the two cover every input and exclude each other.  The analysis
+    takes an infinity as an unknown value; each occurrence was a fresh one,
+    so the checker refused the design with an E0516 its own replay did not
+    show (and warned W0515).  Found by the differential tester's generator."""
+    src = tmp_path / "inf.rcs"
+    src.write_text(
+        "design inf\n"
+        "gm y: f64 = 0.0 from env\n"
+        "controller C level 1 budget 100 us {\n"
+        "    reads y\n"
+        "    verb GO\n"
+        "    plan GO {\n"
+        "        R0: y >= -1.0 / 0.0 | new -> done;\n"
+        "        R1: not (y >= -1.0 / 0.0) | new -> error(5);\n"
+        "        R2: y < 1.0 / 0.0 | new -> done;\n"
+        "    }\n"
+        "}\n"
+        "cpu MAIN {\n    heartbeat 10 ms\n    schedule C\n}\n",
+        encoding="utf-8",
+    )
+    result = check_path(str(src))
+    codes = [d.code for d in result.diags]
+    assert "E0516" not in codes and "W0515" not in codes, codes
+    # R2 is hidden by R0 and R1 together (one of them always fires): still found.
+    assert codes.count("E0506") == 1, codes

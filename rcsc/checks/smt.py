@@ -436,7 +436,6 @@ class Encoder:
         self.inputs: dict[tuple, Input] = {}
         self.side: list[z3.BoolRef] = []  # constraints of extern results
         self._ufs: dict[tuple, z3.FuncDeclRef] = {}
-        self._fresh = 0
         self._used: dict[tuple, None] = {}
         self._approx: set[str] = set()
         self._calls: list[ExternCall] = []
@@ -545,9 +544,12 @@ class Encoder:
             if math.isnan(x):
                 return F(z3.RealVal(0), z3.BoolVal(True))
             if math.isinf(x):
+                # One unknown for each sign, whatever the occurrence: `y >= -inf`
+                # in one rule and `not (y >= -inf)` in another compare with the
+                # same value, so they stay exclusive and cover every input
+                # (fresh unknowns made both false: a false E0516).
                 self._approx.add(APPROX_INFINITE)
-                self._fresh += 1
-                return F(z3.Real(f"inf.{self._fresh}"), z3.BoolVal(False))
+                return F(z3.Real("inf.pos" if x > 0 else "inf.neg"), z3.BoolVal(False))
             return F(real_of(x), z3.BoolVal(False))
         if isinstance(t, EnumType):
             return z3.IntVal(t.members.index(value))

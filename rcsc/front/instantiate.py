@@ -233,6 +233,18 @@ class _TypeCopier(_Copier):
             return e
         return None
 
+    def copy(self, x):
+        # `age(p)` of a `gm` parameter: the age of the variable it is bound
+        # to, its whole variable for a field (stamps belong to variables), as
+        # in `reads` and `writes`; the field itself would not be a name.
+        if (isinstance(x, ast.Call) and x.func.name == "age" and len(x.args) == 1 and x.args[0].name is None
+                and isinstance(x.args[0].value, ast.Name) and x.args[0].value.name in self.gms):
+            head = self.gms[x.args[0].value.name][0]
+            new = self.copy_node(x)
+            new.args = [ast.Arg(new.args[0].span, None, ast.Name(head.span, head.name))]
+            return new
+        return super().copy(x)
+
     def assign(self, node):
         head = node.target[0].name
         if head in self.values:
@@ -375,10 +387,22 @@ def _instantiate(item: ast.ControllerInstance, ctypes: dict[str, ast.ControllerT
         if f.name in ("span", "name", "simulator"):
             continue
         setattr(ctrl, f.name, cp.copy(getattr(body, f.name)))
-    # `reads`/`writes` of a `gm` parameter: the bound variable's name.
+    # `reads`/`writes` of a `gm` parameter: the bound variable's name, once:
+    # two parameters bound to two fields of one variable (`x = pos.x, y =
+    # pos.y`) read or write that variable, which is not listed twice.
     for lists in (ctrl.reads, ctrl.writes):
+        bound_here: set[str] = set()
         for nl in lists:
-            nl.names = [gms[i.name][0] if i.name in gms else i for i in nl.names]
+            names = []
+            for i in nl.names:
+                if i.name in gms:
+                    head = gms[i.name][0]
+                    if head.name in bound_here:
+                        continue
+                    bound_here.add(head.name)
+                    i = head
+                names.append(i)
+            nl.names = names
     for decl in ctrl.status_fields + ctrl.locals:
         if decl.name.name in values or decl.name.name in gms:
             diags.add("E0264", decl.name.span, f"`{decl.name.name}` is also a parameter of `{t.name.name}`", "hides the parameter")
