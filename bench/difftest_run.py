@@ -158,13 +158,13 @@ def observed_from_trace(seed: int, model, sc, run, trace: bytes) -> list[Finding
                         f"{len(run.snapshots)} ticks observed, {len(rebuilt)} rebuilt")]
     # The scenario's `expect` lines: each must find on the rebuilt snapshots
     # what it found in the simulator (held or not, the cycle, the values read).
-    from rcsc.sim.runner import evaluate_expectation
+    from rcsc.sim.runner import evaluate_expectations
 
-    for want in run.results:
-        try:
-            got = evaluate_expectation(model, want.expect, rebuilt)
-        except Exception as exc:
-            return [Finding(seed, "crash", "rcsc test --target (expectations)", f"{type(exc).__name__}: {exc}")]
+    try:
+        found = evaluate_expectations(model, [want.expect for want in run.results], rebuilt)
+    except Exception as exc:
+        return [Finding(seed, "crash", "rcsc test --target (expectations)", f"{type(exc).__name__}: {exc}")]
+    for want, got in zip(run.results, found):
         if (want.passed, want.cycle, want.values) != (got.passed, got.cycle, got.values):
             return [Finding(seed, "disagree", "rcsc test --target (expectations)",
                             f"expect {want.expect.text}: sim {want.passed} at {want.cycle} {want.values}, "
