@@ -496,8 +496,9 @@ def _checked_scenario(design_path: str, scenario_path: str):
     except (OSError, InputError) as exc:
         raise UsageError(f"{scenario_path}: cannot read: {getattr(exc, 'strerror', None) or exc}") from exc
     sc = text_to_scenario(source, result.model, diags) if utf8 else None
-    if sc is None:
+    if sc is None or diags.items:  # the scenario's warnings (W0706, W0707) too
         _report_to_stderr(diags)
+    if sc is None:
         return None
     return result.model, sc
 

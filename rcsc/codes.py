@@ -1173,6 +1173,21 @@ Right:
     at 10: SM.TRANSIT(speed = 12.0, leg_time = 600 s)
     at 200: SM.ALL_STOP()
 """),
+    ("W0707", _W, "scenario input outside the variable's declared range", """
+A `from env` variable declared with a range (`gm level: f64 in 0.0..5.0 from
+env`) tells the checker what the environment can give it: every state table
+is checked for values inside that range only. A scenario input outside it
+drives the design where nothing was checked: a plan proved always to answer
+may wait for ever, an index proved in bounds may not be. To drill an
+out-of-range sensor, widen the declared range so that the checks cover the
+values the drill uses, and keep the input; otherwise correct the input.
+
+Wrong:
+
+    gm level: f64 in 0.0..5.0 = 0.0 from env
+    ...
+    at 10: level = 7.5
+"""),
     ("E0830", _E, "the simulator's externs file does not load", """
 `rcsc sim --externs FILE.py` (and `rcsc test --externs`) runs the design
 with Python functions standing in for its extern functions. The file could

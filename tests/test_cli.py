@@ -295,3 +295,16 @@ def test_sim_refuses_a_scenario_whose_duration_is_finer_than_a_nanosecond(tmp_pa
     assert rc == 1
     assert "error[E0210]" in capsys.readouterr().err
     assert not (tmp_path / "t.jsonl").exists()
+
+
+def test_a_scenario_s_warnings_are_shown_when_it_passes(capsys) -> None:
+    """W0707 (an input outside its variable's declared range) is a warning:
+    `rcsc test` passes the scenario and prints it under the PASS line, and
+    `rcsc sim` prints it on stderr; neither kept it to itself."""
+    case = Path(__file__).resolve().parent / "cases/W0707_input_outside_range"
+    assert cli.main(["test", str(case / "run.scn")]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[0].startswith(f"PASS {case / 'run.scn'}")
+    assert out.count("warning[W0707]") == 2 and out.endswith("1 passed, 0 failed\n")
+    assert cli.main(["sim", str(case / "main.rcs"), "--scenario", str(case / "run.scn"), "-o", "/dev/null"]) == 0
+    assert capsys.readouterr().err.count("warning[W0707]") == 2

@@ -493,4 +493,16 @@ def _input(design, checker, diags, span, cycle, cspan, var: ast.Ident, value: as
     c = checker.constant(value, g.type, "an input value")
     if c is None:
         return None
+    rng = g.range
+    v = c.value
+    if rng is not None and isinstance(v, (int, float)) and not isinstance(v, bool) and not (rng.lo <= v <= rng.hi):
+        # Allowed (a drill may feed a sensor's impossible value), but the
+        # checks assumed the range: say what was not checked.
+        from rcsc.checks.smt import format_value
+
+        shown = [format_value(x, g.type) for x in (v, rng.lo, rng.hi)]
+        diags.add("W0707", value.span, f"`{var.name}` = {shown[0]} is outside its declared range {shown[1]}..{shown[2]}",
+                  "outside the checked range").with_note(
+            f"the design was checked for `{var.name}` in {shown[1]}..{shown[2]} only: what it does with this value was not"
+        ).with_help("to drill an out-of-range input, widen the variable's declared range so that the checks cover it")
     return Input(cycle, var.name, c.value, span)

@@ -218,7 +218,8 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict, target: st
     sc = text_to_scenario(source, checked.model, diags) if utf8 else None
     if sc is None:
         return Outcome(design_path, scenario_path, False, 0.0, message="the scenario has errors", diags=diags)
-    notes = None
+    # The scenario's own warnings (W0706, W0707) are shown whether it passes or not.
+    notes = diags if diags.items else None
     if target == "sim":
         from rcsc.sim import externs as sim_externs
 
@@ -231,7 +232,10 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict, target: st
             return Outcome(design_path, scenario_path, False, 0.0, message="the externs file does not load", diags=loading)
         if loading is not None and loading.items and not design_cache.get(("externs shown", design_path)):
             design_cache[("externs shown", design_path)] = True
-            notes = loading
+            if notes is None:
+                notes = loading
+            else:
+                notes.extend(loading)
         try:
             result = ScenarioRun(checked.model, sc, externs=made).run()  # keeps no history: any length
         except sim_externs.ExternCallError as exc:
