@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
+import stat
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -74,7 +75,7 @@ def _report_out(files: contextlib.ExitStack, output: str | None) -> Callable[[st
     whole when `files` closes without error; `safeio.report_stream`) or to
     stdout."""
     if output is None:
-        return lambda text: _write(sys.stdout, text)
+        return _stdout_writer()
     raw = files.enter_context(_report_file(output))
 
     def write(text: str) -> None:
@@ -82,6 +83,29 @@ def _report_out(files: contextlib.ExitStack, output: str | None) -> Callable[[st
             raw.write(text.encode("utf-8"))
         except OSError as exc:
             raise UsageError(f"cannot write `{output}`: {exc.strerror or exc}") from exc
+
+    return write
+
+
+def _stdout_writer() -> Callable[[str], None]:
+    """Write to stdout until its reader goes away (`rcsc sim ... | head`):
+    then the rest is dropped and the run goes on, so that its verdict
+    (the exit code, the failed expectations on stderr) is still given."""
+    gone = False
+
+    def write(text: str) -> None:
+        nonlocal gone
+        if gone:
+            return
+        try:
+            _write(sys.stdout, text)
+            sys.stdout.flush()
+        except BrokenPipeError:
+            gone = True
+            # Python flushes stdout again at exit: let that go nowhere.
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+            os.close(devnull)
 
     return write
 
@@ -528,10 +552,20 @@ def _run_sim(args: argparse.Namespace) -> int:
     # scenario of any length runs in constant memory.  Several CPUs: the
     # JSON-lines trace has one line per CPU cycle; CSV and VCD show the
     # observer's view (what expectations see) per base tick.
+    # A step log to a device or pipe while the trace goes to stdout (say
+    # `--step-log /dev/stdout`): two writers to one stream would mix, so both
+    # are held and written one after the other, the step log first.
+    held: list[str] | None = None
+    if args.step_log and args.output is None and os.path.lexists(args.step_log) and not stat.S_ISREG(os.lstat(args.step_log).st_mode):
+        held = []
     try:
         with contextlib.ExitStack() as files:
-            out = _report_out(files, args.output)
-            steps = _StepLog(_report_out(files, args.step_log)) if args.step_log else None
+            out = held.append if held is not None else _report_out(files, args.output)
+            step_lines: list[str] | None = [] if held is not None else None
+            if step_lines is not None:
+                steps = step_lines
+            else:
+                steps = _StepLog(_report_out(files, args.step_log)) if args.step_log else None
             run = ScenarioRun(design, sc, externs=externs, step_log=steps)
             if fmt == "jsonl":
                 chunks = trace.jsonl_chunks(design, (rec for t in run.ticks() for rec in t.ran))
@@ -546,6 +580,9 @@ def _run_sim(args: argparse.Namespace) -> int:
         exc.report(diags)
         _report_to_stderr(diags)
         return EXIT_FINDINGS
+    if held is not None and step_lines is not None:
+        _emit_report("".join(x + "\n" for x in step_lines), args.step_log)
+        _write(sys.stdout, "".join(held))
     assert run.results is not None
     run = RunResult(sc, [], run.results, multi_cpu=run.multi)
     if not run.passed:

@@ -157,3 +157,66 @@ def test_streamed_reports_are_whole_or_absent(tmp_path: Path) -> None:
     assert len(rows) == 41 and [r.split(",")[0] for r in rows[1:]] == [str(k) for k in range(1, 41)]
     assert steps.read_text(encoding="utf-8").count("\n") >= 40
     assert not list(tmp_path.glob(".rcsc-*")), "no temporary file is left"
+
+
+STREAMING = ROOT / "tests/streaming"
+
+
+def test_a_quiet_span_comes_out_of_the_csv_writer_in_pieces() -> None:
+    """A CSV row per tick of a long quiet span: the writer yields them in
+    pieces, so the span does not become one string in memory (it took 617 MB
+    for 2,000,000 ticks)."""
+    model, sc = _scenario(SUBMARINE, "cycles 3\nat 1: SM.INIT()\n", Path("/tmp"))
+    view = run_scenario(model, sc).snapshots[0]
+    tracemalloc.start()
+    try:
+        rows = 0
+        biggest = 0
+        for chunk in trace.csv_chunks(model, [(view, 200_000)]):
+            rows += chunk.count("\n")
+            biggest = max(biggest, len(chunk))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert rows == 1 + 200_000
+    assert biggest < 2_000_000 and peak < 20_000_000, (biggest, peak)
+
+
+def _sim(*args: str):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "rcsc", "sim", *args], capture_output=True, text=True, timeout=300,
+                          cwd=STREAMING)
+
+
+def test_the_verdict_survives_a_reader_that_goes_away() -> None:
+    """`rcsc sim ... | head -1`: the trace's reader leaves early; the run
+    goes on without it and still gives its verdict (exit 1 and the failed
+    expectations on stderr), as when the trace was written at the end."""
+    import subprocess
+    import sys
+
+    cmd = f"{sys.executable} -m rcsc sim two_cpus.rcs --scenario two_cpus_stops.scn --trace-format csv | head -1 > /dev/null; echo $?"
+    shell = f"set -o pipefail; {cmd}"
+    r = subprocess.run(["bash", "-c", shell], capture_output=True, text=True, timeout=300, cwd=STREAMING)
+    assert r.stdout.strip() == "1", (r.stdout, r.stderr)
+    assert "expect at 15: y == 99" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_a_step_log_to_stdout_comes_before_the_trace() -> None:
+    """`--step-log /dev/stdout` with the trace on stdout: the step log, then
+    the trace, each whole (two writers to one stream would mix them)."""
+    r = _sim("two_cpus.rcs", "--scenario", "two_cpus_stops.scn", "--step-log", "/dev/stdout")
+    lines = r.stdout.splitlines()
+    first_trace = next(i for i, line in enumerate(lines) if line.startswith("{"))
+    assert first_trace > 0 and all(not line.startswith("{") for line in lines[:first_trace])
+    assert all(line.startswith("{") for line in lines[first_trace:])
+
+
+def test_an_extern_that_fails_keeps_the_scenario_s_warnings(capsys) -> None:
+    """The scenario's W0707 is shown with the E0831 of an extern that fails
+    mid-run (it was dropped with the run)."""
+    rc, out, _ = _rcsc("test", "--externs", str(STREAMING / "extern_fails_externs.py"), str(STREAMING / "extern_fails_run.scn"))
+    assert rc == 1
+    assert "warning[W0707]: `x` = 50.0 is outside its declared range 0.0..10.0" in out and "error[E0831]" in out

@@ -79,3 +79,18 @@ def test_a_scenario_kept_elsewhere_runs_on_the_design_named_with_it(tmp_path: Pa
         found, problems = discover(paths)
         assert all(str(far) not in ss for _, ss in found)
         assert len(problems) == 1 and "no design for it" in problems[0] and "rcsc test DESIGN.rcs" in problems[0]
+
+
+def test_the_design_named_with_a_scenario_wins_over_the_one_beside_it(tmp_path: Path) -> None:
+    """`rcsc test plant.rcs other/s.scn` where `other/` has a design of its
+    own: the scenario runs on the design named with it, as asked."""
+    plant, other = tmp_path / "plant", tmp_path / "other"
+    plant.mkdir()
+    other.mkdir()
+    named = plant / "submarine.rcs"
+    named.write_text(SUBMARINE.read_text(encoding="utf-8"), encoding="utf-8")
+    (other / "o.rcs").write_text(SUBMARINE.read_text(encoding="utf-8"), encoding="utf-8")
+    scn = other / "s.scn"
+    scn.write_text("cycles 3\nat 1: SM.INIT()\n", encoding="utf-8")
+    found, problems = discover([str(named), str(scn)])
+    assert problems == [] and found == [(str(named), [str(scn)])]

@@ -126,10 +126,12 @@ class _Sema:
         for name, item in self.decls.items():
             if isinstance(item, ast.Const):
                 self.const_ast[name] = item
-        for name in self.record_ast:
-            self._record(name)
+        # Before any record resolves: a field of a type defined twice is as
+        # unknown as the type (`h.k.x` with `k: Knot`).
         for name in self.ambiguous_types:
             self.g.types[name] = ERROR
+        for name in self.record_ast:
+            self._record(name)
 
     def _record(self, name: str) -> Type:
         if name in self.g.types:

@@ -106,8 +106,8 @@ def discover(paths: list[str]) -> tuple[list[tuple[str, list[str]]], list[str]]:
     plan: dict[str, list[str]] = {}
     problems: list[str] = []
     unclaimed: list[str] = []  # scenarios beside several designs that none of them claims
-    # A scenario with no design of its own runs on the design named with it
-    # (`rcsc test plant.rcs soak/long.scn`), when exactly one is named.
+    # A scenario named with exactly one design runs on that design
+    # (`rcsc test plant.rcs soak/long.scn`), whatever lies beside it.
     named = [p for p in paths if not p.endswith(".scn") and os.path.isfile(p)]
     named_design = named[0] if len(named) == 1 else None
     for p in paths:
@@ -126,7 +126,7 @@ def discover(paths: list[str]) -> tuple[list[tuple[str, list[str]]], list[str]]:
                     problems += [f"{o}: no design beside it is named like `{_stem(o)}` (`NAME.rcs` owns `NAME.scn` and `NAME_*.scn`)"
                                  for o in orphans]
         elif p.endswith(".scn") and os.path.isfile(p):
-            d = design_of(p) or named_design
+            d = named_design or design_of(p)
             if d is None:
                 problems.append(f"{p}: no design for it: no design file beside it or in the folder above, "
                                 f"or several and none named like `{_stem(p)}` (`NAME.rcs` owns `NAME.scn` and `NAME_*.scn`); "
@@ -229,7 +229,7 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict, target: st
             design_cache[key] = (sim_externs.load(externs, checked.model, loading), loading)
         made, loading = design_cache.get(key, (None, None))
         if loading is not None and loading.has_errors():
-            return Outcome(design_path, scenario_path, False, 0.0, message="the externs file does not load", diags=loading)
+            return Outcome(design_path, scenario_path, False, 0.0, message="the externs file does not load", diags=loading, notes=notes)
         if loading is not None and loading.items and not design_cache.get(("externs shown", design_path)):
             design_cache[("externs shown", design_path)] = True
             if notes is None:
@@ -241,7 +241,8 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict, target: st
         except sim_externs.ExternCallError as exc:
             failed = Diagnostics()
             exc.report(failed)
-            return Outcome(design_path, scenario_path, False, time.perf_counter() - start, message="an extern failed", diags=failed)
+            return Outcome(design_path, scenario_path, False, time.perf_counter() - start, message="an extern failed", diags=failed,
+                           notes=notes)
     else:
         from pathlib import Path
 
@@ -257,7 +258,7 @@ def run_one(design_path: str, scenario_path: str, design_cache: dict, target: st
             result = compiled.run_compiled(checked.model, sc, built, built.folder / "runs")
         except compiled.CompiledError as exc:
             design_cache.setdefault(key, exc)
-            return Outcome(design_path, scenario_path, False, time.perf_counter() - start, message=f"{target}: {exc}")
+            return Outcome(design_path, scenario_path, False, time.perf_counter() - start, message=f"{target}: {exc}", notes=notes)
     seconds = time.perf_counter() - start
     return Outcome(design_path, scenario_path, result.passed, seconds, sc.cycles, "" if result.passed else failure_text(result), result=result,
                    notes=notes)

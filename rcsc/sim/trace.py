@@ -250,6 +250,10 @@ def csv_chunks(design: m.Design, views: Iterable[tuple[Snapshot, int]]) -> Itera
         row = [_csv_text(v, t) for _, v, t in cols]
         for k in range(snap.cycle, last + 1):
             w.writerow([k] + row)
+            if k % 1024 == 0:  # a long quiet span comes out in pieces, not as one string
+                yield buf.getvalue()
+                buf.seek(0)
+                buf.truncate()
         yield buf.getvalue()
         buf.seek(0)
         buf.truncate()
