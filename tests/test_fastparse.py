@@ -96,15 +96,7 @@ def repo_files() -> list[Path]:
     for pattern in ("examples/**/*.rcs", "tests/cases/**/*.rcs", "stdlib/**/*.rcs", "tests/stress/**/*.rcs", "tests/sim/**/*.rcs"):
         files += sorted(ROOT.glob(pattern))
     # A file that is not UTF-8 is never parsed (E0010, tests/cases/E0010_not_utf8).
-    return [f for f in files if f.read_bytes().isascii() or _decodes(f.read_bytes())]
-
-
-def _decodes(data: bytes) -> bool:
-    try:
-        data.decode("utf-8")
-    except UnicodeDecodeError:
-        return False
-    return True
+    return [f for f in files if test_fuzz._is_utf8(f.read_bytes())]
 
 
 def test_repo_files_parse_the_same() -> None:
