@@ -555,16 +555,16 @@ def _run_sim(args: argparse.Namespace) -> int:
     # A step log to a device or pipe while the trace goes to stdout (say
     # `--step-log /dev/stdout`): two writers to one stream would mix, so both
     # are held and written one after the other, the step log first.
-    held: list[str] | None = None
-    if args.step_log and args.output is None and os.path.lexists(args.step_log) and not stat.S_ISREG(os.lstat(args.step_log).st_mode):
-        held = []
+    hold = bool(args.step_log) and args.output is None and os.path.lexists(args.step_log) \
+        and not stat.S_ISREG(os.lstat(args.step_log).st_mode)
+    held_trace: list[str] = []
+    held_steps: list[str] = []
     try:
         with contextlib.ExitStack() as files:
-            out = held.append if held is not None else _report_out(files, args.output)
-            step_lines: list[str] | None = [] if held is not None else None
-            if step_lines is not None:
-                steps = step_lines
+            if hold:
+                out, steps = held_trace.append, held_steps
             else:
+                out = _report_out(files, args.output)
                 steps = _StepLog(_report_out(files, args.step_log)) if args.step_log else None
             run = ScenarioRun(design, sc, externs=externs, step_log=steps)
             if fmt == "jsonl":
@@ -580,9 +580,9 @@ def _run_sim(args: argparse.Namespace) -> int:
         exc.report(diags)
         _report_to_stderr(diags)
         return EXIT_FINDINGS
-    if held is not None and step_lines is not None:
-        _emit_report("".join(x + "\n" for x in step_lines), args.step_log)
-        _write(sys.stdout, "".join(held))
+    if hold:
+        _emit_report("".join(x + "\n" for x in held_steps), args.step_log)
+        _write(sys.stdout, "".join(held_trace))
     assert run.results is not None
     run = RunResult(sc, [], run.results, multi_cpu=run.multi)
     if not run.passed:

@@ -104,7 +104,12 @@ def _trace_int(text: str):
 
 def read_trace(text: str) -> list[dict]:
     """The lines of a program's JSON-lines trace (ValueError if one is not JSON)."""
-    return [json.loads(x, parse_int=_trace_int) for x in text.splitlines()]
+    return [trace_line(x) for x in text.split("\n") if x]
+
+
+def trace_line(line: str) -> dict:
+    """One line of a program's trace (ValueError if it is not JSON)."""
+    return json.loads(line, parse_int=_trace_int)
 
 
 def _value(v, t: Type):
@@ -211,7 +216,7 @@ def run_compiled(design: m.Design, sc: Scenario, b: Build, work: Path) -> RunRes
     expectations = Expectations(design, sc.expects)
     try:
         with trace.open(encoding="utf-8") as f:
-            for view in views(design, sc, (json.loads(x, parse_int=_trace_int) for x in f), b.multi):
+            for view in views(design, sc, (trace_line(x) for x in f), b.multi):
                 expectations.see(view)
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise CompiledError(f"the program's trace is unreadable: {exc}") from exc
